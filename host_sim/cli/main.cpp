@@ -1,0 +1,29 @@
+// scopekin: the host-side command line (reference model, later the simulator).
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "host_sim/cli/verify_command.hpp"
+#include "model/model_error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"scopekin - colonoscope kinetics: reference beam model, verification (and, later, the simulated "
+               "sensor box)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "scopekin 0.1.0");
+  scopekin::cli::add_verify_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& status) {
+    return status.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const scopekin::model::ModelError& e) {
+    std::cerr << "scopekin: invalid model: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "scopekin: error: " << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

@@ -1,0 +1,162 @@
+#!/usr/bin/env bash
+# scopekin — single entry point for building, running and testing.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+cd "$ROOT"
+
+# Debian 12 packages the build, the cross toolchains and the emulators need.
+PACKAGES=(
+  cmake ninja-build g++
+  libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
+  libgtest-dev libgmock-dev googletest libbenchmark-dev
+  g++-aarch64-linux-gnu libc6-dev-arm64-cross
+  gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+  qemu-user qemu-system-arm
+  python3
+)
+ALL_PRESETS=(host asan aarch64 cortex-m4)
+BUILD_JOBS=2
+
+usage() {
+  cat <<USAGE
+Usage: ./scopekin.sh <command> [args]
+
+Commands:
+  main [args...]      Install missing Debian packages, configure and build the 'host' preset,
+                      then run: build/host/host_sim/scopekin verify [args...]
+  test [preset...]    Install missing Debian packages, then for each preset (default: all of
+                      ${ALL_PRESETS[*]}) configure, build (-j${BUILD_JOBS}) and run ctest.
+                      Ends with one CTest-style line summed over all presets, e.g.
+                        100% tests passed, 0 tests failed out of N
+                      A preset that fails to configure or build counts as one failed test.
+                      Exit status is non-zero if anything failed.
+  -h, --help, help    Show this help.
+
+Packages are checked with dpkg-query; only if some are missing does the script run
+'apt-get update' and 'apt-get install -y --no-install-recommends <missing>' (as root, or via sudo).
+Logs of 'test' are kept in build/logs/<preset>.log.
+USAGE
+}
+
+ensure_packages() {
+  local missing=() pkg
+  for pkg in "${PACKAGES[@]}"; do
+    if [[ "$(dpkg-query -W -f='${db:Status-Status}' "$pkg" 2>/dev/null || true)" != "installed" ]]; then
+      missing+=("$pkg")
+    fi
+  done
+  if [[ ${#missing[@]} -eq 0 ]]; then
+    return 0
+  fi
+  echo "scopekin.sh: installing missing packages: ${missing[*]}"
+  local sudo=()
+  if [[ $EUID -ne 0 ]]; then
+    sudo=(sudo)
+  fi
+  "${sudo[@]}" apt-get update
+  "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive \
+    apt-get install -y --no-install-recommends "${missing[@]}"
+}
+
+cmd_main() {
+  ensure_packages
+  cmake --preset host
+  cmake --build --preset host
+  local cli=build/host/host_sim/scopekin
+  if [[ ! -x "$cli" ]]; then
+    echo "scopekin.sh: $cli was not built (host_sim/ does not define it yet)" >&2
+    exit 1
+  fi
+  "$cli" verify "$@"
+}
+
+cmd_test() {
+  local presets=("$@")
+  if [[ ${#presets[@]} -eq 0 ]]; then
+    presets=("${ALL_PRESETS[@]}")
+  fi
+  local p k known
+  for p in "${presets[@]}"; do
+    known=0
+    for k in "${ALL_PRESETS[@]}"; do [[ "$p" == "$k" ]] && known=1; done
+    if [[ $known -eq 0 ]]; then
+      echo "scopekin.sh: unknown preset '$p' (known: ${ALL_PRESETS[*]})" >&2
+      exit 2
+    fi
+  done
+
+  ensure_packages
+  mkdir -p build/logs
+
+  local total=0 failed=0 broken=() report=() start seconds log line t f
+  for p in "${presets[@]}"; do
+    echo "==================== preset: $p ===================="
+    start=$SECONDS
+    log="build/logs/$p.log"
+    if ! cmake --preset "$p"; then
+      broken+=("$p (configure)"); failed=$((failed + 1)); total=$((total + 1))
+      report+=("$p: configure FAILED"); continue
+    fi
+    if ! cmake --build --preset "$p" -j "$BUILD_JOBS"; then
+      broken+=("$p (build)"); failed=$((failed + 1)); total=$((total + 1))
+      report+=("$p: build FAILED"); continue
+    fi
+    set +e
+    ctest --preset "$p" 2>&1 | tee "$log"
+    local rc=${PIPESTATUS[0]}
+    set -e
+    seconds=$((SECONDS - start))
+    line="$(grep -E '^[0-9]+% tests passed, [0-9]+ tests failed out of [0-9]+' "$log" | tail -n 1 || true)"
+    if [[ -n "$line" ]]; then
+      f="$(sed -E 's/^[0-9]+% tests passed, ([0-9]+) tests failed out of ([0-9]+).*/\1/' <<<"$line")"
+      t="$(sed -E 's/^[0-9]+% tests passed, ([0-9]+) tests failed out of ([0-9]+).*/\2/' <<<"$line")"
+      if [[ $rc -ne 0 && $f -eq 0 ]]; then
+        f=1  # ctest failed for another reason; never report it as a pass
+      fi
+    else
+      t=1; f=1  # no tests found or ctest did not get to run them
+    fi
+    total=$((total + t)); failed=$((failed + f))
+    [[ $f -ne 0 ]] && broken+=("$p (tests)")
+    report+=("$p: $((t - f))/$t passed, ${seconds}s configure+build+test")
+  done
+
+  echo "==================== summary ===================="
+  local r
+  for r in "${report[@]}"; do echo "  $r"; done
+  if [[ ${#broken[@]} -gt 0 ]]; then
+    echo "  failed: ${broken[*]}"
+  fi
+  # CTest's own formula: rounded percentage, never 100% while something failed.
+  local percent=0
+  if [[ $total -gt 0 ]]; then
+    percent=$(( ((total - failed) * 200 + total) / (2 * total) ))
+    if [[ $failed -gt 0 && $percent -gt 99 ]]; then
+      percent=99
+    fi
+  fi
+  echo "${percent}% tests passed, ${failed} tests failed out of ${total}"
+  [[ $failed -eq 0 && $total -gt 0 ]]
+}
+
+main() {
+  if [[ $# -eq 0 ]]; then
+    usage >&2
+    exit 2
+  fi
+  local command=$1
+  shift
+  case "$command" in
+    main) cmd_main "$@" ;;
+    test) cmd_test "$@" ;;
+    -h|--help|help) usage ;;
+    *)
+      echo "scopekin.sh: unknown command '$command'" >&2
+      usage >&2
+      exit 2
+      ;;
+  esac
+}
+
+main "$@"
