@@ -54,9 +54,8 @@ struct CorotationalResponse {
   Mat12 geometric_tangent;    ///< d(B^T)/dq f_l: stress stiffening / softening of the rotating frame
 };
 
-/// Internal force and consistent tangent. The geometric part is a forward difference of
-/// B^T f_l with f_l frozen (relative step 1e-7): exact to ~1e-7, which keeps Newton's
-/// convergence quadratic down to that level while the residual itself stays exact.
+/// Internal force and the exact consistent tangent (material + geometric, Battini & Pacoste
+/// 2002 Sec. 5, derived here with global vectors; checked against finite differences in tests).
 CorotationalResponse corotational_response(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,
                                            const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
                                            const Eigen::Matrix3d& rotation_b, bool with_tangent);

@@ -44,6 +44,11 @@ void ScopeBeam::set_pose(std::size_t node, const Eigen::Vector3d& position_mm, c
   rotations_[node] = rotation;
 }
 
+void ScopeBeam::restore(const Configuration& saved) {
+  positions_ = saved.positions;
+  rotations_ = saved.rotations;
+}
+
 void ScopeBeam::apply_increment(const Eigen::VectorXd& inc) {
   for (std::size_t i = 0; i < positions_.size(); ++i) {
     const auto r = static_cast<Eigen::Index>(6 * i);
@@ -53,12 +58,22 @@ void ScopeBeam::apply_increment(const Eigen::VectorXd& inc) {
   }
 }
 
-void ScopeBeam::assemble(Assembly& out, bool with_tangent) const {
+namespace {
+/// Eq. (4.6) on the updated configuration: the local mass rotated by the element's frame.
+Mat12 global_mass(const Eigen::Matrix3d& frame, const Mat12& local_mass) {
+  Mat12 t = Mat12::Zero();
+  for (int b = 0; b < 4; ++b) t.block<3, 3>(3 * b, 3 * b) = frame;
+  return t * local_mass * t.transpose();
+}
+}  // namespace
+
+void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass) const {
   out.internal_force = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(dof_count()));
   if (with_tangent) {
     out.tangent.resize(node_count());
     out.material_tangent.resize(node_count());
   }
+  if (mass != nullptr) mass->resize(node_count());
   for (std::size_t e = 0; e < element_count(); ++e) {
     const CorotationalResponse resp = corotational_response(references_[e], positions_[e], rotations_[e],
                                                             positions_[e + 1], rotations_[e + 1], with_tangent);
@@ -67,6 +82,7 @@ void ScopeBeam::assemble(Assembly& out, bool with_tangent) const {
       out.material_tangent.add_element(e, resp.material_tangent);
       out.tangent.add_element(e, resp.material_tangent + resp.geometric_tangent);
     }
+    if (mass != nullptr) mass->add_element(e, global_mass(resp.kinematics.frame, references_[e].local_mass));
   }
 }
 
@@ -75,9 +91,7 @@ void ScopeBeam::assemble_mass(BlockTridiagonalMatrix& mass) const {
   for (std::size_t e = 0; e < element_count(); ++e) {
     const CorotationalKinematics k = corotational_kinematics(references_[e], positions_[e], rotations_[e],
                                                              positions_[e + 1], rotations_[e + 1]);
-    Mat12 t = Mat12::Zero();
-    for (int b = 0; b < 4; ++b) t.block<3, 3>(3 * b, 3 * b) = k.frame;
-    mass.add_element(e, t * references_[e].local_mass * t.transpose());
+    mass.add_element(e, global_mass(k.frame, references_[e].local_mass));
   }
 }
 

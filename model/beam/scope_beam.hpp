@@ -32,6 +32,14 @@ class ScopeBeam {
   double arc_length_mm(std::size_t node) const { return arc_length_[node]; }
 
   void set_pose(std::size_t node, const Eigen::Vector3d& position_mm, const Eigen::Matrix3d& rotation);
+
+  /// All node poses, to undo a rejected load step or time step.
+  struct Configuration {
+    std::vector<Eigen::Vector3d> positions;
+    std::vector<Eigen::Matrix3d> rotations;
+  };
+  Configuration configuration() const { return {positions_, rotations_}; }
+  void restore(const Configuration& saved);
   void reset_to_reference();
   /// x += dx, R = exp(S(dw)) R for every node; `increment` has 6 entries per node.
   void apply_increment(const Eigen::VectorXd& increment);
@@ -41,7 +49,9 @@ class ScopeBeam {
     BlockTridiagonalMatrix tangent;            ///< material + geometric
     BlockTridiagonalMatrix material_tangent;   ///< B^T K_l B, for stiffness-proportional damping
   };
-  void assemble(Assembly& out, bool with_tangent) const;
+  /// Internal force, and with `with_tangent` the tangents; with `mass` also the mass matrix
+  /// (same as assemble_mass, computed in the same pass over the elements).
+  void assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass = nullptr) const;
   /// Consistent mass (Eq. 4.5) rotated into each element's current frame (Eq. 4.6 on the
   /// updated configuration). Gyroscopic terms are neglected (slow rotation rates).
   void assemble_mass(BlockTridiagonalMatrix& mass) const;

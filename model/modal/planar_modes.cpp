@@ -11,10 +11,13 @@ std::vector<PlanarMode> planar_bending_modes(const ScopeBeam& beam, const Raylei
   for (std::size_t i = 0; i < beam.node_count(); ++i)
     if (std::abs(beam.reference_position(i).y()) > 1e-9 || std::abs(beam.reference_position(i).z()) > 1e-9)
       throw ModelError("planar_bending_modes: node " + std::to_string(i) + " is off the x axis");
+  // The modes of the reference configuration (header), whatever pose `beam` is in now.
+  ScopeBeam reference = beam;
+  reference.reset_to_reference();
   ScopeBeam::Assembly assembly;
-  beam.assemble(assembly, true);
+  reference.assemble(assembly, true);
   BlockTridiagonalMatrix mass;
-  beam.assemble_mass(mass);
+  reference.assemble_mass(mass);
   const Eigen::MatrixXd k_full = assembly.material_tangent.to_dense();
   const Eigen::MatrixXd m_full = mass.to_dense();
   std::vector<Eigen::Index> dofs;

@@ -36,7 +36,10 @@ class DynamicSolver {
  public:
   DynamicSolver(const ScopeBeam& beam, DynamicSettings settings);
   /// Advances the beam by one time step. `loads` are evaluated at the end of the step;
-  /// supports with targets are driven to those targets at the end of the step.
+  /// supports with targets are driven to those targets at the end of the step. Newton starts
+  /// from a constant-velocity predictor with one factorisation per step (modified Newton) and
+  /// falls back to plain Newton from q_n if that fails; a step that still fails to converge
+  /// is undone (state and time unchanged) and reported with converged = false.
   DynamicStepReport step(ScopeBeam& beam, const BeamLoads& loads, const std::vector<NodeSupport>& supports);
   /// Node velocities: 6 per node [mm/s, rad/s].
   const Eigen::VectorXd& velocity() const { return velocity_; }
@@ -44,8 +47,12 @@ class DynamicSolver {
   const DynamicSettings& settings() const { return settings_; }
 
  private:
+  DynamicStepReport attempt(ScopeBeam& beam, const BeamLoads& loads, const std::vector<NodeSupport>& supports,
+                            bool fast);
+
   DynamicSettings settings_;
   Eigen::VectorXd velocity_;
+  Eigen::VectorXd step_increment_;
   double time_s_ = 0;
   ScopeBeam::Assembly assembly_;
   BlockTridiagonalMatrix mass_, damping_, system_;

@@ -11,22 +11,6 @@
 namespace scopekin::model {
 namespace {
 
-struct Snapshot {
-  std::vector<Eigen::Vector3d> positions;
-  std::vector<Eigen::Matrix3d> rotations;
-};
-Snapshot take(const ScopeBeam& b) {
-  Snapshot s;
-  for (std::size_t i = 0; i < b.node_count(); ++i) {
-    s.positions.push_back(b.position(i));
-    s.rotations.push_back(b.rotation(i));
-  }
-  return s;
-}
-void restore(ScopeBeam& b, const Snapshot& s) {
-  for (std::size_t i = 0; i < b.node_count(); ++i) b.set_pose(i, s.positions[i], s.rotations[i]);
-}
-
 }  // namespace
 
 double step_size(const ScopeBeam& beam, const Eigen::VectorXd& increment) {
@@ -69,13 +53,13 @@ StaticReport solve_static(ScopeBeam& beam, const BeamLoads& loads, const std::ve
   int halvings = 0;
   while (lambda < 1.0 - 1e-12) {
     const double target = std::min(1.0, lambda + step);
-    const Snapshot saved = take(beam);
+    const ScopeBeam::Configuration saved = beam.configuration();
     LoadStepLog log;
     log.load_factor = target;
     const Eigen::VectorXd f_ext = target * f_full;
     double last_step = std::numeric_limits<double>::infinity();
     for (int it = 0; it <= settings.max_iterations; ++it) {
-      beam.assemble(assembly, true);
+      beam.assemble(assembly, false);  // the tangent only when another correction is needed
       const Eigen::VectorXd residual = f_ext - assembly.internal_force;
       if (!residual.allFinite()) break;
       const SupportMotion motion = support_motion(beam, supports, start, target);
@@ -98,6 +82,7 @@ StaticReport solve_static(ScopeBeam& beam, const BeamLoads& loads, const std::ve
         break;
       }
       if (it == settings.max_iterations) break;
+      beam.assemble(assembly, true);
       Eigen::VectorXd increment;
       if (!solve_constrained(assembly.tangent, residual, motion, increment)) {
         report.message = "singular tangent stiffness at load factor " + std::to_string(target) +
@@ -114,7 +99,7 @@ StaticReport solve_static(ScopeBeam& beam, const BeamLoads& loads, const std::ve
       if (halvings > 0 && log.iterations < settings.max_iterations / 3) step = std::min(2.0 * step, 1.0 / settings.load_steps);
       continue;
     }
-    restore(beam, saved);
+    beam.restore(saved);
     if (!report.message.empty() && report.message.rfind("singular", 0) == 0) return report;
     if (++halvings > settings.max_halvings) {
       report.message = "Newton did not converge at load factor " + std::to_string(target) + " after " +

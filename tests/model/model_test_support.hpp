@@ -1,0 +1,49 @@
+#pragma once
+// Small helpers shared by the model tests: seeded random vectors and rotations (every run draws
+// the same numbers, so a failure reproduces) and a matrix comparison with a readable message.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace scopekin::model::testing {
+
+class Random {
+ public:
+  explicit Random(unsigned seed) : engine_(seed) {}
+  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine_); }
+  Eigen::Vector3d vector(double lo, double hi) { return {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)}; }
+  /// Uniform on the unit sphere (normalised Gaussian).
+  Eigen::Vector3d unit_vector() {
+    std::normal_distribution<double> n(0.0, 1.0);
+    Eigen::Vector3d v;
+    do {
+      v = Eigen::Vector3d(n(engine_), n(engine_), n(engine_));
+    } while (v.norm() < 1e-3);
+    return v.normalized();
+  }
+  /// Rotation of angle `angle_rad` about a random axis, built with Eigen's AngleAxis (not with
+  /// the model's rotation_exp, so that it can serve as an independent reference).
+  Eigen::Matrix3d rotation(double angle_rad) { return Eigen::AngleAxisd(angle_rad, unit_vector()).toRotationMatrix(); }
+
+ private:
+  std::mt19937 engine_;
+};
+
+/// Max-norm of the difference, compared against an absolute tolerance.
+inline ::testing::AssertionResult matrices_near(const Eigen::MatrixXd& actual, const Eigen::MatrixXd& expected,
+                                                double tolerance) {
+  if (actual.rows() != expected.rows() || actual.cols() != expected.cols())
+    return ::testing::AssertionFailure() << "shape " << actual.rows() << "x" << actual.cols() << " vs "
+                                         << expected.rows() << "x" << expected.cols();
+  const double error = (actual - expected).cwiseAbs().maxCoeff();
+  if (error <= tolerance) return ::testing::AssertionSuccess();
+  Eigen::IOFormat fmt(6, 0, ", ", "\n", "[", "]");
+  return ::testing::AssertionFailure() << "max |difference| " << error << " > " << tolerance << "\nactual:\n"
+                                       << actual.format(fmt) << "\nexpected:\n"
+                                       << expected.format(fmt);
+}
+
+}  // namespace scopekin::model::testing
