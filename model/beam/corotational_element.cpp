@@ -126,7 +126,9 @@ CorotationalResponse corotational_response(const CorotationalReference& ref, con
   out.internal_force = out.kinematics.b_matrix.transpose() * out.local_force;
   if (!with_tangent) return out;
   const CorotationalKinematics& k = out.kinematics;
-  out.material_tangent = k.b_matrix.transpose() * ref.local_stiffness * k.b_matrix;
+  // lazyProduct: coefficient-based products; Eigen's GEMM path is slower at these small sizes.
+  const Eigen::Matrix<double, 7, 12> kb = ref.local_stiffness.lazyProduct(k.b_matrix);
+  out.material_tangent = k.b_matrix.transpose().lazyProduct(kb);
 
   // Geometric tangent: the variation of B^T f_l with f_l frozen. With m_i = T^-T(theta_i) f_theta_i
   // and spin_i = [.. R_r^T at node i ..] - g, f_g = N r^T + sum_i spin_i^T m_i, so
@@ -154,10 +156,12 @@ CorotationalResponse corotational_response(const CorotationalReference& ref, con
   spin_a.block<3, 3>(0, 3) += f.frame.transpose();
   Eigen::Matrix<double, 3, 12> spin_b = -f.spin;
   spin_b.block<3, 3>(0, 9) += f.frame.transpose();
-  kg += spin_a.transpose() * moment_transform_derivative(theta_a, out.local_force.segment<3>(1)) *
-        k.b_matrix.block<3, 12>(1, 0);
-  kg += spin_b.transpose() * moment_transform_derivative(theta_b, out.local_force.segment<3>(4)) *
-        k.b_matrix.block<3, 12>(4, 0);
+  const Eigen::Matrix<double, 3, 12> hb_a =
+      moment_transform_derivative(theta_a, out.local_force.segment<3>(1)).lazyProduct(k.b_matrix.block<3, 12>(1, 0));
+  const Eigen::Matrix<double, 3, 12> hb_b =
+      moment_transform_derivative(theta_b, out.local_force.segment<3>(4)).lazyProduct(k.b_matrix.block<3, 12>(4, 0));
+  kg += spin_a.transpose().lazyProduct(hb_a);
+  kg += spin_b.transpose().lazyProduct(hb_b);
   // d(g^T m)/dq with m = m_a + m_b frozen. g^T m = [t; w_a; -t; w_b] with
   //   t = m1 q1/(q2 l) r3 + (m2 r3 - m3 r2)/l,   w_i = m1/(2 q2) (q_i x r3),
   // and every ingredient varies linearly: d r_j = -S(r_j) Omega dq (Omega = R_r g, the frame's

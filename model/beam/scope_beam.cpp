@@ -60,10 +60,13 @@ void ScopeBeam::apply_increment(const Eigen::VectorXd& inc) {
 
 namespace {
 /// Eq. (4.6) on the updated configuration: the local mass rotated by the element's frame.
+/// The rotation is block-diagonal (4 copies of the frame), so rotate the 16 3x3 blocks.
 Mat12 global_mass(const Eigen::Matrix3d& frame, const Mat12& local_mass) {
-  Mat12 t = Mat12::Zero();
-  for (int b = 0; b < 4; ++b) t.block<3, 3>(3 * b, 3 * b) = frame;
-  return t * local_mass * t.transpose();
+  Mat12 m;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      m.block<3, 3>(3 * i, 3 * j) = frame * local_mass.block<3, 3>(3 * i, 3 * j) * frame.transpose();
+  return m;
 }
 }  // namespace
 
