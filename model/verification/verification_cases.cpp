@@ -20,14 +20,12 @@ constexpr double kInfo = std::numeric_limits<double>::quiet_NaN();  // tolerance
 /// A slender, practically inextensible test beam for the published elastica benchmarks:
 /// EI = 1e6 N mm^2, EA = kappa G A = 1e8 N (P L / EA ~ 1e-7 L at the largest load).
 BeamSection benchmark_section() {
-  BeamSection s;
-  s.axial_stiffness_N = 1e8;
-  s.bending_stiffness_y_Nmm2 = 1e6;
-  s.bending_stiffness_z_Nmm2 = 1e6;
-  s.torsional_stiffness_Nmm2 = 1e6;
-  s.shear_stiffness_y_N = 1e8;
-  s.shear_stiffness_z_N = 1e8;
-  return s;
+  return BeamSection{.axial_stiffness_N = 1e8,
+                     .bending_stiffness_y_Nmm2 = 1e6,
+                     .bending_stiffness_z_Nmm2 = 1e6,
+                     .torsional_stiffness_Nmm2 = 1e6,
+                     .shear_stiffness_y_N = 1e8,
+                     .shear_stiffness_z_N = 1e8};
 }
 constexpr double kBenchmarkLength_mm = 1000.0;
 constexpr std::size_t kBenchmarkElements = 20;  // the issue allows at most 20

@@ -21,15 +21,13 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 
 BeamSection good_section() {
-  BeamSection s;
-  s.axial_stiffness_N = 3000.0;
-  s.bending_stiffness_y_Nmm2 = 35000.0;
-  s.bending_stiffness_z_Nmm2 = 35000.0;
-  s.torsional_stiffness_Nmm2 = 7000.0;
-  s.shear_stiffness_y_N = 285.0;
-  s.shear_stiffness_z_N = 285.0;
-  s.mass_per_length_t_per_mm = 1.2e-6;
-  return s;
+  return BeamSection{.axial_stiffness_N = 3000.0,
+                     .bending_stiffness_y_Nmm2 = 35000.0,
+                     .bending_stiffness_z_Nmm2 = 35000.0,
+                     .torsional_stiffness_Nmm2 = 7000.0,
+                     .shear_stiffness_y_N = 285.0,
+                     .shear_stiffness_z_N = 285.0,
+                     .mass_per_length_t_per_mm = 1.2e-6};
 }
 
 std::vector<Vec3> three_nodes() { return {Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(20, 0, 0)}; }

@@ -24,15 +24,13 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
 BeamSection test_section() {
-  BeamSection s;
-  s.axial_stiffness_N = 3000.0;
-  s.bending_stiffness_y_Nmm2 = 20000.0;
-  s.bending_stiffness_z_Nmm2 = 35000.0;
-  s.torsional_stiffness_Nmm2 = 7000.0;
-  s.shear_stiffness_y_N = 250.0;
-  s.shear_stiffness_z_N = 300.0;
-  s.mass_per_length_t_per_mm = 1.2e-6;
-  return s;
+  return BeamSection{.axial_stiffness_N = 3000.0,
+                     .bending_stiffness_y_Nmm2 = 20000.0,
+                     .bending_stiffness_z_Nmm2 = 35000.0,
+                     .torsional_stiffness_Nmm2 = 7000.0,
+                     .shear_stiffness_y_N = 250.0,
+                     .shear_stiffness_z_N = 300.0,
+                     .mass_per_length_t_per_mm = 1.2e-6};
 }
 constexpr double kLength = 15.0;
 

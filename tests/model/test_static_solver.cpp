@@ -23,15 +23,13 @@ using Mat3 = Eigen::Matrix3d;
 
 /// Slender, practically inextensible and shear-rigid section (EA L^2 / EI = 1e4 at L = 100).
 BeamSection stiff_section() {
-  BeamSection s;
-  s.axial_stiffness_N = 1e8;
-  s.bending_stiffness_y_Nmm2 = 1e6;
-  s.bending_stiffness_z_Nmm2 = 1e6;
-  s.torsional_stiffness_Nmm2 = 8e5;
-  s.shear_stiffness_y_N = 1e8;
-  s.shear_stiffness_z_N = 1e8;
-  s.mass_per_length_t_per_mm = 1e-6;
-  return s;
+  return BeamSection{.axial_stiffness_N = 1e8,
+                     .bending_stiffness_y_Nmm2 = 1e6,
+                     .bending_stiffness_z_Nmm2 = 1e6,
+                     .torsional_stiffness_Nmm2 = 8e5,
+                     .shear_stiffness_y_N = 1e8,
+                     .shear_stiffness_z_N = 1e8,
+                     .mass_per_length_t_per_mm = 1e-6};
 }
 
 NodeSupport clamp(std::size_t node) {

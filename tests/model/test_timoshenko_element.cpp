@@ -24,18 +24,16 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 
 // Deliberately different values in the two bending planes, so a swapped index shows.
 BeamSection test_section() {
-  BeamSection s;
-  s.axial_stiffness_N = 3000.0;
-  s.bending_stiffness_y_Nmm2 = 20000.0;
-  s.bending_stiffness_z_Nmm2 = 35000.0;
-  s.torsional_stiffness_Nmm2 = 7000.0;
-  s.shear_stiffness_y_N = 250.0;
-  s.shear_stiffness_z_N = 300.0;
-  s.mass_per_length_t_per_mm = 1.2e-6;
-  s.rotary_inertia_y_t_mm = 1.1e-5;
-  s.rotary_inertia_z_t_mm = 1.6e-5;
-  s.polar_inertia_t_mm = 2.7e-5;
-  return s;
+  return BeamSection{.axial_stiffness_N = 3000.0,
+                     .bending_stiffness_y_Nmm2 = 20000.0,
+                     .bending_stiffness_z_Nmm2 = 35000.0,
+                     .torsional_stiffness_Nmm2 = 7000.0,
+                     .shear_stiffness_y_N = 250.0,
+                     .shear_stiffness_z_N = 300.0,
+                     .mass_per_length_t_per_mm = 1.2e-6,
+                     .rotary_inertia_y_t_mm = 1.1e-5,
+                     .rotary_inertia_z_t_mm = 1.6e-5,
+                     .polar_inertia_t_mm = 2.7e-5};
 }
 constexpr double kLength = 12.0;  // mm: short, so shear adds a large share (phi_y = 12 EI_z/(kGA l^2) = 11.7)
 
