@@ -65,7 +65,7 @@ cmd_main() {
   cmake --build --preset host
   local cli=build/host/host_sim/scopekin
   if [[ ! -x "$cli" ]]; then
-    echo "scopekin.sh: $cli was not built (host_sim/ does not define it yet)" >&2
+    echo "scopekin.sh: $cli was not built" >&2
     exit 1
   fi
   "$cli" verify "$@"
