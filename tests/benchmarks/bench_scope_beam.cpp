@@ -13,8 +13,9 @@ using namespace scopekin::model;
 
 constexpr std::size_t kElements = 170;
 
-ScopeBeam make_scope() {
-  return straight_beam(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), cf_q160l::kWorkingLength_mm, kElements,
+/// The 1.7 m scope in `elements` equal elements (170 = 1 cm elements).
+ScopeBeam make_scope(std::size_t elements = kElements) {
+  return straight_beam(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), cf_q160l::kWorkingLength_mm, elements,
                        cf_q160l::section());
 }
 
@@ -44,8 +45,9 @@ BENCHMARK(BM_DynamicStep)->Arg(5)->Arg(33)->Unit(benchmark::kMicrosecond);
 
 // One Newton iteration of a static solve: assemble internal force and tangent, apply the
 // clamp, factorise and solve the block-tridiagonal system, update the configuration.
+// Argument: number of elements (the cost must grow linearly with it).
 void BM_StaticNewtonIteration(benchmark::State& state) {
-  ScopeBeam scope = make_scope();
+  ScopeBeam scope = make_scope(static_cast<std::size_t>(state.range(0)));
   BeamLoads loads;
   loads.gravity_mm_per_s2 = Eigen::Vector3d(0.0, -kGravity_mm_per_s2, 0.0);
   const Eigen::VectorXd f_ext = 1e-3 * loads.assemble(scope);
@@ -63,7 +65,7 @@ void BM_StaticNewtonIteration(benchmark::State& state) {
     benchmark::DoNotOptimize(increment.data());
   }
 }
-BENCHMARK(BM_StaticNewtonIteration)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StaticNewtonIteration)->Arg(85)->Arg(170)->Arg(340)->Arg(680)->Unit(benchmark::kMicrosecond);
 
 // The element kernel alone: co-rotational internal force + consistent tangent of one element.
 void BM_CorotationalElement(benchmark::State& state) {
