@@ -1,4 +1,6 @@
 // scopekin: the host-side command line (reference model, later the simulator).
+// Exit status: 0 success, 1 a check failed / a solve did not converge, 2 bad usage or invalid
+// input (the message names the field), 3 any other error (e.g. an output file not writable).
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
@@ -19,7 +21,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::RuntimeError& status) {
     return status.get_exit_code();
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help / --version exit 0; every usage error exits 2, like an invalid input file.
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const scopekin::model::ModelError& e) {
     std::cerr << "scopekin: invalid model: " << e.what() << "\n";
     return 2;
