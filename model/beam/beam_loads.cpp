@@ -24,7 +24,25 @@ Eigen::VectorXd BeamLoads::assemble(const ScopeBeam& beam) const {
     f.segment<3>(r) += nodal[k].force_N;
     f.segment<3>(r + 3) += nodal[k].moment_Nmm;
   }
+  for (std::size_t k = 0; k < springs.size(); ++k) {
+    const std::string where = "springs[" + std::to_string(k) + "]";
+    if (springs[k].node >= beam.node_count())
+      throw ModelError(where + ".node: " + std::to_string(springs[k].node) + " is out of range (beam has " +
+                       std::to_string(beam.node_count()) + " nodes)");
+    require_non_negative(springs[k].stiffness_N_per_mm, where + ".stiffness_N_per_mm");
+    for (int c = 0; c < 3; ++c) require_finite(springs[k].anchor_mm(c), where + ".anchor_mm." + "xyz"[c]);
+  }
   return f;
+}
+
+void BeamLoads::add_spring_forces(const ScopeBeam& beam, Eigen::VectorXd& force) const {
+  for (const AnchorSpring& s : springs)
+    force.segment<3>(static_cast<Eigen::Index>(6 * s.node)) += s.stiffness_N_per_mm * (s.anchor_mm - beam.position(s.node));
+}
+
+void BeamLoads::add_spring_stiffness(BlockTridiagonalMatrix& tangent) const {
+  for (const AnchorSpring& s : springs)
+    tangent.diagonal(s.node).block<3, 3>(0, 0) += s.stiffness_N_per_mm * Eigen::Matrix3d::Identity();
 }
 
 void validate_supports(const ScopeBeam& beam, const std::vector<NodeSupport>& supports) {

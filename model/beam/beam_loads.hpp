@@ -16,11 +16,26 @@ struct NodalLoad {
   Eigen::Vector3d moment_Nmm = Eigen::Vector3d::Zero();  ///< fixed in space (not a follower moment)
 };
 
+/// A linear spring [N/mm] pulling a node's position towards a fixed anchor point: the mesentery
+/// holding a mobile colon region, or any elastic foundation. It is part of the structure, so a
+/// static solve's load factor does not scale it.
+struct AnchorSpring {
+  std::size_t node = 0;
+  Eigen::Vector3d anchor_mm = Eigen::Vector3d::Zero();
+  double stiffness_N_per_mm = 0;
+};
+
 struct BeamLoads {
   Eigen::Vector3d gravity_mm_per_s2 = Eigen::Vector3d::Zero();
   std::vector<NodalLoad> nodal;
-  /// Global load vector [N, N mm]; throws ModelError naming a bad node index or non-finite value.
+  std::vector<AnchorSpring> springs;
+  /// Global load vector [N, N mm] of gravity and nodal loads (not the springs); throws ModelError
+  /// naming a bad node index or non-finite value (springs included).
   Eigen::VectorXd assemble(const ScopeBeam& beam) const;
+  /// Adds the springs' forces k (anchor - x) at the beam's current positions to `force`.
+  void add_spring_forces(const ScopeBeam& beam, Eigen::VectorXd& force) const;
+  /// Adds the springs' stiffness k I to the translational diagonal blocks of `tangent`.
+  void add_spring_stiffness(BlockTridiagonalMatrix& tangent) const;
 };
 
 /// A clamp (all fixed, target = where the node is) or a prescribed pose (targets set).

@@ -74,6 +74,7 @@ DynamicStepReport DynamicSolver::attempt(ScopeBeam& beam, const BeamLoads& loads
   BlockTridiagonalSolver factorization;
   auto refactorize = [&](const BlockTridiagonalMatrix& tangent) {
     system_ = tangent;
+    loads.add_spring_stiffness(system_);
     system_.add_scaled(mass_, 1.0 / (h * h));
     system_.add_scaled(damping_, 1.0 / h);
     for (std::size_t dof : to_targets.dofs) system_.constrain_dof(dof);
@@ -89,6 +90,7 @@ DynamicStepReport DynamicSolver::attempt(ScopeBeam& beam, const BeamLoads& loads
     Eigen::VectorXd residual = f_ext - assembly_.internal_force -
                                (mass_.multiply(step_increment_) / (h * h) - momentum_term +
                                 damping_.multiply(step_increment_) / h);
+    loads.add_spring_forces(beam, residual);
     if (!residual.allFinite()) break;
     const SupportMotion motion = support_motion(beam, supports, start, 1.0);
     const ResidualNorm norm = free_residual_norm(residual, motion);

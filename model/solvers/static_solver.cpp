@@ -60,7 +60,8 @@ StaticReport solve_static(ScopeBeam& beam, const BeamLoads& loads, const std::ve
     double last_step = std::numeric_limits<double>::infinity();
     for (int it = 0; it <= settings.max_iterations; ++it) {
       beam.assemble(assembly, false);  // the tangent only when another correction is needed
-      const Eigen::VectorXd residual = f_ext - assembly.internal_force;
+      Eigen::VectorXd residual = f_ext - assembly.internal_force;
+      loads.add_spring_forces(beam, residual);
       if (!residual.allFinite()) break;
       const SupportMotion motion = support_motion(beam, supports, start, target);
       const ResidualNorm norm = free_residual_norm(residual, motion);
@@ -83,6 +84,7 @@ StaticReport solve_static(ScopeBeam& beam, const BeamLoads& loads, const std::ve
       }
       if (it == settings.max_iterations) break;
       beam.assemble(assembly, true);
+      loads.add_spring_stiffness(assembly.tangent);
       Eigen::VectorXd increment;
       if (!solve_constrained(assembly.tangent, residual, motion, increment)) {
         report.message = "singular tangent stiffness at load factor " + std::to_string(target) +
