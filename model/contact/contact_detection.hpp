@@ -1,0 +1,38 @@
+#pragma once
+// Contact detection between the scope and the colon wall (thesis 4.4): the scope is a chain of
+// nodes of radius r_s inside a tube whose lumen has radius r(s) around the colon's current
+// centerline. For each scope node: the closest point on the centerline, the gap to the wall
+// g = r(s) - r_s - distance (mm, negative = penetration), and the contact frame
+//   n: from the scope node towards the centerline (the direction the wall pushes the scope),
+//   t: along the colon (towards the cecum) made orthogonal to n,   s = n x t.
+// Nodes whose closest point lies before the anus (outside the body) get no contact. Several
+// contacts at once: every node with g below the activation distance is a candidate.
+#include <Eigen/Dense>
+#include <vector>
+
+#include "model/beam/scope_beam.hpp"
+#include "model/colon/colon_tube.hpp"
+
+namespace scopekin::model {
+
+struct ContactCandidate {
+  std::size_t scope_node = 0;
+  std::size_t colon_segment = 0;  ///< centerline segment j (points j, j+1)
+  double colon_weight = 0;        ///< position on the segment in [0, 1] (0 at point j)
+  Eigen::Vector3d centerline_point_mm = Eigen::Vector3d::Zero();
+  double gap_mm = 0;
+  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< columns n, t, s
+  ColonRegion region = ColonRegion::rectum;
+};
+
+struct ContactDetectionSettings {
+  double scope_radius_mm = 6.65;
+  /// Nodes closer to the wall than this become candidates (the solver decides if they touch).
+  double activation_distance_mm = 2.0;
+};
+
+/// `colon` holds the colon's current node positions (one node per point of `tube`).
+std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const ScopeBeam& colon, const ColonTube& tube,
+                                              const ContactDetectionSettings& settings);
+
+}  // namespace scopekin::model
