@@ -1,0 +1,22 @@
+// Compile-only check, built on EVERY preset with the firmware flags (cmake/firmware_flags.cmake:
+// strict warnings, -fno-exceptions, -fno-rtti, EIGEN_NO_MALLOC): the contact solver template,
+// explicitly instantiated for float and double.  On host/asan/aarch64 the float test executable
+// is built with GoogleTest (exceptions on), so this object library is what proves the firmware
+// build of the header there.  Nothing links it.
+#include "contact/gauss_seidel_contact.hpp"
+
+namespace scopekin::contact {
+
+template ContactSolveReport<float, 16> solve_contacts<float, 16>(
+    const ContactProblem<float, 16>&, const GaussSeidelSettings<float>&,
+    ContactForces<float, 16>&) noexcept;
+template ContactResiduals<float> evaluate_contact_residuals<float, 16>(
+    const ContactProblem<float, 16>&, const ContactForces<float, 16>&) noexcept;
+template LocalContactSolution<float> solve_local_contact<float>(const ContactBlock3<float>&,
+                                                                const ContactVec3<float>&, float,
+                                                                std::size_t, bool) noexcept;
+template ContactSolveReport<double, 16> solve_contacts<double, 16>(
+    const ContactProblem<double, 16>&, const GaussSeidelSettings<double>&,
+    ContactForces<double, 16>&) noexcept;
+
+}  // namespace scopekin::contact
