@@ -110,7 +110,7 @@ std::vector<VerificationRow> roll_up_rows() {
 }
 
 std::vector<VerificationRow> tip_load_rows() {
-  // A short CF-Q160L stub, where shear adds ~4 % to the bending deflection (Timoshenko).
+  // A short CF-Q160L cantilever (100 mm), where shear adds ~4 % to the bending deflection (Timoshenko).
   const BeamSection s = cf_q160l::section();
   const double length = 100.0, load = 1e-3;
   ScopeBeam beam = straight_beam(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(), length, 10, s);

@@ -70,7 +70,7 @@ TEST(DynamicSolver, TimeStepOutsideTheAllowedRangeIsRejected) {
   }
 }
 
-// (b) A damped CF-Q160L stub (300 mm, 15 elements) released straight under gravity comes to
+// (b) A damped short CF-Q160L cantilever (300 mm, 15 elements) released straight under gravity comes to
 // rest on the static solution. It sags far (w L^4 / 8EI = 330 mm > L: it ends up hanging
 // almost vertically), so this also exercises large rotations in the dynamic solver.
 // Decay: the thesis damping alone has a' / 2 = 1.2 1/s on every mode (mass-proportional part),
@@ -107,7 +107,7 @@ struct Oscillation {
   std::vector<double> peaks;           // largest |tip y| between consecutive crossings
 };
 
-// (c) Free vibration without physical damping: a CF-Q160L stub (100 mm, 8 elements) released
+// (c) Free vibration without physical damping: a short CF-Q160L cantilever (100 mm, 8 elements) released
 // from a small static tip deflection (1e-3 L: geometric nonlinearity ~1e-6).
 TEST(DynamicSolver, UndampedFreeVibrationHasTheFirstModePeriodAndDecaysOnlyNumerically) {
   const double length = 100.0, h = 0.001;
