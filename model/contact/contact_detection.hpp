@@ -35,4 +35,20 @@ struct ContactDetectionSettings {
 std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const ScopeBeam& colon, const ColonTube& tube,
                                               const ContactDetectionSettings& settings);
 
+/// Where each scope node was on the centerline last time (-1: not yet tracked), so that time
+/// stepping searches only nearby segments: O(nodes) instead of O(nodes x segments), and a node
+/// cannot jump to a part of the colon that is close in space but far along the colon (the
+/// loops of the sigmoid). A node whose nearby search finds nothing within one lumen diameter
+/// falls back to the full search.
+struct CenterlineTracking {
+  std::vector<long> segment;
+  std::size_t window_segments = 3;
+};
+
+/// The same detection against colon centerline positions (one per tube point), skipping the
+/// scope nodes flagged in `skip_node` (may be empty), with tracking.
+std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const std::vector<Eigen::Vector3d>& colon_mm,
+                                              const ColonTube& tube, const ContactDetectionSettings& settings,
+                                              const std::vector<bool>& skip_node, CenterlineTracking* tracking);
+
 }  // namespace scopekin::model

@@ -9,6 +9,7 @@
 #include "model/modal/planar_modes.hpp"
 #include "model/scope/cf_q160l.hpp"
 #include "model/solvers/static_solver.hpp"
+#include "model/verification/contact_verification.hpp"
 #include "model/verification/measured_cantilever.hpp"
 #include "model/verification/verification_row.hpp"
 
@@ -196,6 +197,10 @@ std::vector<VerificationCase> verification_cases() {
        frequency_rows},
       {"damping", "Rayleigh damping (Hz convention resolved) vs measured zeta at 1 / 7 / 44 Hz (Table 4.1)",
        damping_rows},
+      {"contact_lcp", "Gauss-Seidel frictional contact vs closed forms, 1000 random problems, active-set enumeration",
+       contact_verification::lcp_rows},
+      {"contact_world", "Scope pushed through a straight tube and a 115 deg bend; self-locking with mu above/below",
+       contact_verification::world_rows},
   };
 }
 

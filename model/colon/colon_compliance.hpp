@@ -1,0 +1,44 @@
+#pragma once
+// The colon's compliance on its centerline nodes: C = K_c^-1 restricted to node translations
+// [mm/N], from the linear stiffness-only colon of thesis Eq. 4.16 (K_c U_c = F_c) with its
+// clamps (fixed regions) and mesentery springs (mobile regions). K_c is the tangent of the
+// unloaded structure, so C is constant and is computed once (3m solves of the banded K_c).
+// It gives the colon's part of the Delassus operator (Eq. 4.24) and the colon's displacement
+// under the contact forces. A contact point on segment j at weight w moves as
+// (1 - w) u_j + w u_{j+1} and shares its force the same way; the wall's offset from the
+// centerline (rotation of the colon's section) is neglected, like the radial deformation.
+#include <Eigen/Dense>
+#include <vector>
+
+#include "model/colon/colon_beam.hpp"
+
+namespace scopekin::model {
+
+/// A force on the colon at a point of its centerline.
+struct ColonPointForce {
+  std::size_t segment = 0;
+  double weight = 0;  ///< in [0, 1] along the segment
+  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();
+};
+
+class ColonCompliance {
+ public:
+  /// Throws ModelError if the colon is not held (a region that is neither clamped nor on a
+  /// mesentery spring makes K_c singular).
+  explicit ColonCompliance(const ColonStructure& colon);
+  std::size_t node_count() const { return nodes_; }
+  /// Translational compliance between nodes i and j [mm/N].
+  Eigen::Matrix3d node_block(std::size_t i, std::size_t j) const {
+    return compliance_.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j));
+  }
+  /// Compliance between two centerline points (segment, weight) [mm/N].
+  Eigen::Matrix3d point_block(std::size_t segment_a, double weight_a, std::size_t segment_b, double weight_b) const;
+  /// Displacement of every node [mm] under the given point forces.
+  void displacement(const std::vector<ColonPointForce>& forces, std::vector<Eigen::Vector3d>& displacement_mm) const;
+
+ private:
+  std::size_t nodes_ = 0;
+  Eigen::MatrixXd compliance_;
+};
+
+}  // namespace scopekin::model

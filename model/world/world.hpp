@@ -1,0 +1,206 @@
+#pragma once
+// The world: the scope inside the colon, stepped in time (thesis 5.3, PHYSICS.md Sec. 5).
+// Every step of h:
+//   1. free motion: the scope's implicit Euler step (M/h^2 + C/h + K_T) d = r with the handle's
+//      prescribed motion, gravity and handle loads, no contact (linearised: one Newton
+//      iteration by default, as SOFA's implicit Euler the thesis used; more on request);
+//   2. contact detection at the free configuration against the colon at rest;
+//   3. Delassus operator W = H (A^-1 + K_c^-1) H^T on the contact frames (Eq. 4.20, 4.24): the
+//      scope's part from selected blocks of A^-1, the colon's from its precomputed compliance;
+//   4. contact forces from the LCP with Coulomb friction (Eq. 4.19-4.23) by the one
+//      Gauss-Seidel solver (firmware/contact/gauss_seidel_contact.hpp), warm-started;
+//   5. contact correction: d += A^-1 H^T f; the colon takes u_c = K_c^-1 (-H^T f).
+//
+// The handle. The scope's node 0 is the handle end, the last node the tip. Outside the body
+// the shaft is held straight on the entry axis (the line through the anus along the colon's
+// first segment) by the physician's hand and the sensor box: every node that has not passed
+// the anus is prescribed on that axis. Insertion depth (mm of scope past the anus) and roll
+// (rad about the entry axis) are either prescribed (advance, withdraw, hold, dither, rotate) or
+// free with an applied push force / torque at the handle. The handle force is the axial force
+// the hand applies (support reactions along the axis, or the applied force), positive pushing
+// in; the handle torque likewise about the axis.
+//
+// Frames. Inputs and outputs are in the colon's (body) frame. Inside, the world computes in a
+// frame with the anus at the origin and the entry axis along +x, so that the handle's sliding
+// and rolling freedoms are single global DOFs.
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "contact/gauss_seidel_contact.hpp"  // firmware/: the one Gauss-Seidel solver
+#include "model/beam/scope_beam.hpp"
+#include "model/colon/colon_compliance.hpp"
+#include "model/colon/colon_tube.hpp"
+#include "model/contact/contact_detection.hpp"
+#include "model/linalg/selected_inverse.hpp"
+#include "model/solvers/rayleigh_damping.hpp"
+#include "model/world/world_effect.hpp"
+
+namespace scopekin::model {
+
+/// Capacity of the contact problem (simultaneous contacts). Under gravity a scope lies on the
+/// colon wall along most of its inserted length, so the reference model makes room for one
+/// contact per node of a 1.7 m scope in 1 cm elements (and more); the solver's work grows with
+/// the contacts actually present, not with the capacity. Beyond it the closest are kept and the
+/// rest are counted as dropped.
+inline constexpr std::size_t kMaxWorldContacts = 256;
+
+/// Friction coefficient on a stretch of the scope, measured from the tip [mm].
+struct FrictionZone {
+  double from_tip_mm = 0;
+  double to_tip_mm = 0;
+  double coefficient = 0.25;
+};
+
+struct WorldContactSettings {
+  double activation_distance_mm = 2.0;  ///< nodes closer to the wall enter the LCP
+  double friction_coefficient = 0.25;   ///< thesis 5.3 value; default for the whole scope
+  std::vector<FrictionZone> friction_zones;  ///< overrides along the scope (later zones win)
+  /// Local compliance of the colon wall at a contact [mm/N], isotropic, added to W_aa: the wall's
+  /// own indentation, which the beam colon (no radial deformation, thesis 4.3) leaves out. Order
+  /// of magnitude of a soft layer pressed over one node's length l: 1 / (E l) with the sigmoid's
+  /// E = 0.36 N/mm^2 (Table 4.6) and l = 10 mm gives 0.28 mm/N. It also keeps W_aa well
+  /// conditioned where the colon is clamped (rigid), which Gauss-Seidel needs to converge fast.
+  double wall_compliance_mm_per_N = 0.28;
+  double tolerance_N = 1e-6;            ///< Gauss-Seidel: largest force change per sweep
+  std::size_t max_sweeps = 2000;
+  /// Gauss-Seidel over-relaxation omega in (0, 2); 1 = plain Gauss-Seidel.
+  double relaxation = 1.0;
+  void validate() const;  ///< throws ModelError naming the field
+};
+
+struct ScopeSpec {
+  double length_mm = 1700.0;
+  std::size_t elements = 170;
+  double radius_mm = 6.65;
+  BeamSection section;  ///< all elements (effects may change them)
+};
+
+struct WorldSettings {
+  double time_step_s = 0.01;  ///< [0.001, 0.033] s
+  RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
+  int newton_iterations = 1;  ///< of the free motion; 1 = linearly implicit Euler
+  Eigen::Vector3d gravity_mm_per_s2{0.0, 0.0, -9810.0};  ///< body frame (default colon: patient supine)
+  double initial_insertion_mm = 0.0;  ///< scope past the anus at t = 0, straight on the entry axis
+  WorldContactSettings contact;
+  void validate() const;
+};
+
+/// What the hand does over the coming step (values at the end of the step).
+struct HandleCommand {
+  bool force_controlled = false;  ///< axial: push force applied instead of depth prescribed
+  double insertion_mm = 0;        ///< prescribed depth (position control)
+  double push_force_N = 0;        ///< applied force along the entry axis, + = in (force control)
+  bool torque_controlled = false;
+  double roll_rad = 0;            ///< prescribed roll about the entry axis
+  double torque_Nmm = 0;          ///< applied torque about the entry axis (torque control)
+};
+
+/// One contact after a step, in the body frame.
+struct WorldContact {
+  std::size_t scope_node = 0;
+  double arc_from_tip_mm = 0;
+  ColonRegion region = ColonRegion::rectum;
+  Eigen::Vector3d scope_point_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< wall -> scope
+  double normal_force_N = 0;
+  double tangential_force_N = 0;
+  double friction_coefficient = 0;
+  /// Driving-force angle alpha = atan(|f_T| / f_n) (thesis 2.2.1); stick needs alpha < atan(mu).
+  double driving_angle_rad = 0;
+  double gap_mm = 0;  ///< after the correction (linearised); < 0 = penetration
+  Eigen::Vector3d slip_mm = Eigen::Vector3d::Zero();  ///< relative tangential motion over the step
+  contact::ContactState state = contact::ContactState::separated;
+};
+
+struct WorldStepReport {
+  bool ok = false;
+  std::string failure;  ///< why the step failed (the world is left as before the step)
+  std::size_t contacts = 0;
+  std::size_t dropped_contacts = 0;  ///< candidates beyond kMaxWorldContacts (closest kept)
+  std::size_t sweeps = 0;
+  double contact_residual_N = 0;   ///< max of the solver's complementarity, cone, friction residuals
+  double max_penetration_mm = 0;   ///< linearised, after the correction
+  double friction_work_Nmm = 0;    ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
+  bool material_tangent_fallback = false;  ///< the full tangent failed; the step used the material one
+};
+
+class World {
+ public:
+  /// Builds the colon (structure, compliance) and the straight scope on the entry axis, tip at
+  /// `settings.initial_insertion_mm` past the anus. Throws ModelError naming the problem for bad
+  /// settings, a colon that is not held, or an initial insertion that crosses the wall.
+  World(const ScopeSpec& scope, const ColonTube& colon, const std::array<ColonRegionProperties, 8>& properties,
+        WorldSettings settings, std::vector<std::shared_ptr<const WorldEffect>> effects = {});
+
+  /// Advances by one time step. A failed step (singular system, non-finite state, contact solver
+  /// not converged) leaves the world unchanged and says why.
+  WorldStepReport step(const HandleCommand& command);
+
+  double time_s() const { return time_s_; }
+  double time_step_s() const { return settings_.time_step_s; }
+  double insertion_depth_mm() const;
+  double roll_rad() const { return roll_rad_; }
+  double handle_force_N() const { return handle_force_N_; }
+  double handle_torque_Nmm() const { return handle_torque_Nmm_; }
+  double scope_length_mm() const { return length_mm_; }
+  std::size_t scope_node_count() const { return scope_.node_count(); }
+  double arc_from_tip_mm(std::size_t node) const { return length_mm_ - scope_.arc_length_mm(node); }
+  /// Scope node position in the body frame [mm]; node 0 = handle, last = tip.
+  Eigen::Vector3d node_position_mm(std::size_t node) const;
+  /// Node velocity in the body frame [mm/s].
+  Eigen::Vector3d node_velocity_mm_per_s(std::size_t node) const;
+  /// Scope axis direction at a node (body frame).
+  Eigen::Vector3d node_axis(std::size_t node) const;
+  const std::vector<WorldContact>& contacts() const { return contact_reports_; }
+  /// Colon centerline node positions now (at rest + displacement under the contact forces), body frame.
+  std::vector<Eigen::Vector3d> colon_positions_mm() const;
+  const ColonTube& colon() const { return body_tube_; }
+  /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
+  const ScopeBeam& scope_computation_frame() const { return scope_; }
+  /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.
+  double scope_energy_Nmm() const;
+
+ private:
+  using Problem = contact::ContactProblem<double, kMaxWorldContacts>;
+  using Forces = contact::ContactForces<double, kMaxWorldContacts>;
+
+  Eigen::Vector3d to_body(const Eigen::Vector3d& x) const { return anus_ + rotation_.transpose() * x; }
+  Eigen::Vector3d to_body_direction(const Eigen::Vector3d& v) const { return rotation_.transpose() * v; }
+  double friction_at(double arc_from_tip_mm, ColonRegion region) const;
+  WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent);
+
+  WorldSettings settings_;
+  std::vector<std::shared_ptr<const WorldEffect>> effects_;
+  Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();  // body -> computation
+  Eigen::Vector3d anus_ = Eigen::Vector3d::Zero();          // body frame
+  ColonTube body_tube_;
+  ColonTube tube_;  // computation frame
+  std::vector<Eigen::Vector3d> colon_rest_mm_;
+  std::unique_ptr<ColonCompliance> compliance_;
+  ScopeBeam scope_;
+  double length_mm_ = 0;
+  double scope_radius_mm_ = 0;
+  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // computation frame
+
+  double time_s_ = 0;
+  double roll_rad_ = 0;
+  double handle_force_N_ = 0;
+  double handle_torque_Nmm_ = 0;
+  Eigen::VectorXd velocity_;
+  std::vector<ColonPointForce> colon_forces_;  // on the colon, computation frame
+  std::vector<WorldContact> contact_reports_;
+  std::vector<std::array<double, 3>> warm_start_;  // last contact force (n, t, s) per scope node
+  CenterlineTracking tracking_;
+
+  // Work storage reused every step.
+  ScopeBeam::Assembly assembly_;
+  BlockTridiagonalMatrix mass_, damping_, system_, unconstrained_;
+  BlockTridiagonalSolver factorization_;
+  SelectedInverse selected_inverse_;
+  std::unique_ptr<Problem> problem_;
+  std::unique_ptr<Forces> forces_;
+};
+
+}  // namespace scopekin::model
