@@ -5,6 +5,7 @@
 #include <exception>
 #include <iostream>
 
+#include "host_sim/cli/simulate_command.hpp"
 #include "host_sim/cli/static_command.hpp"
 #include "host_sim/cli/verify_command.hpp"
 #include "model/model_error.hpp"
@@ -16,6 +17,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "scopekin 0.1.0");
   scopekin::cli::add_verify_command(app);
   scopekin::cli::add_static_command(app);
+  scopekin::cli::add_simulate_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& status) {

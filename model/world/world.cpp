@@ -425,7 +425,8 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
   warm_start_.assign(nodes, {0.0, 0.0, 0.0});
   for (std::size_t a = 0; a < nc; ++a) warm_start_[candidates[a].scope_node] = forces[a];
   roll_rad_ += wrap_pi(roll_of(scope_.rotation(0)) - wrap_pi(roll_rad_));
-  time_s_ += h;
+  ++steps_taken_;
+  time_s_ = static_cast<double>(steps_taken_) * h;  // no drift from summing h
   report.contacts = nc;
   report.ok = true;
   return report;

@@ -185,6 +185,7 @@ class World {
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // computation frame
 
   double time_s_ = 0;
+  std::size_t steps_taken_ = 0;
   double roll_rad_ = 0;
   double handle_force_N_ = 0;
   double handle_torque_Nmm_ = 0;

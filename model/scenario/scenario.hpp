@@ -1,0 +1,57 @@
+#pragma once
+// Scenario files (README "Scenario files"): what `scopekin simulate` runs. Two kinds, told apart
+// by their top-level keys:
+//  * a world scenario ("colon"): a colon, a scope, solver settings, a procedure at the handle
+//    and the outputs wanted;
+//  * a free beam scenario ("beam"): exactly a beam problem file (model/io/beam_problem.hpp),
+//    solved statically.
+// Read strictly: unknown keys, wrong types and unphysical values are rejected with the field's
+// full path (ModelError).
+#include <array>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "model/colon/colon_region.hpp"
+#include "model/colon/colon_tube.hpp"
+#include "model/io/beam_problem.hpp"
+#include "model/scenario/procedure.hpp"
+#include "model/world/world.hpp"
+
+namespace scopekin::model {
+
+enum class ScenarioKind { world, free_beam };
+
+struct ScenarioOutputs {
+  double sample_rate_Hz = 30.0;              ///< rows of the recording (the thesis's sensor rate)
+  std::vector<double> nodes_from_tip_mm;     ///< extra node position columns (nearest node)
+  bool contacts_file = false;                ///< also write one row per loaded contact per sample
+};
+
+struct Scenario {
+  ScenarioKind kind = ScenarioKind::world;
+  std::string source;       ///< the file name (or what the caller named the document)
+  std::string description;
+
+  // World scenario.
+  std::optional<ColonTube> colon;
+  std::array<ColonRegionProperties, 8> colon_properties{};  ///< kColonRegionsInOrder order
+  std::string scope_model = "cf_q160l";
+  ScopeSpec scope;
+  WorldSettings settings;
+  Procedure procedure;
+  ScenarioOutputs outputs;
+
+  // Free beam scenario.
+  std::optional<io::BeamProblem> beam_problem;
+};
+
+/// Reads and validates a scenario document; `source` names it in messages.
+Scenario read_scenario(const nlohmann::json& document, const std::string& source);
+Scenario read_scenario_file(const std::string& filename);
+
+/// Scope node nearest to `arc_from_tip_mm` on a uniform scope of `elements` elements.
+std::size_t scope_node_from_tip(double arc_from_tip_mm, double scope_length_mm, std::size_t elements);
+
+}  // namespace scopekin::model
