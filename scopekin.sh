@@ -25,6 +25,8 @@ Usage: ./scopekin.sh <command> [args]
 Commands:
   main [args...]      Install missing Debian packages, configure and build the 'host' preset,
                       then run: build/host/host_sim/scopekin verify [args...]
+                      and the bundled default procedure:
+                        scopekin simulate model/scenarios/default_insertion.json --out build/main_run
   test [preset...]    Install missing Debian packages, then for each preset (default: all of
                       ${ALL_PRESETS[*]}) configure, build (-j${BUILD_JOBS}) and run ctest.
                       Ends with one CTest-style line summed over all presets, e.g.
@@ -68,7 +70,12 @@ cmd_main() {
     echo "scopekin.sh: $cli was not built" >&2
     exit 1
   fi
-  "$cli" verify "$@"
+  local status=0
+  "$cli" verify "$@" || status=$?
+  echo
+  echo "Default procedure: model/scenarios/default_insertion.json -> build/main_run/"
+  "$cli" simulate model/scenarios/default_insertion.json --out build/main_run || status=$?
+  exit "$status"
 }
 
 cmd_test() {
