@@ -320,12 +320,14 @@ bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2
 
 /// Exact solve of one contact: delta = A f + d with Signorini and Coulomb (coefficient mu).
 /// A is W_aa (row-major (n, t, s)).  `full_iterations` makes the slip root-finder do all
-/// `local_iterations` steps (fixed work).
+/// `local_iterations` steps (fixed work).  `previous` (optional): this contact's force from the
+/// last sweep, used only to start the slip root-finder (any start inside the bracket converges).
 template <typename Scalar>
 LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
                                                  const ContactVec3<Scalar>& d, Scalar mu,
                                                  std::size_t local_iterations,
-                                                 bool full_iterations) noexcept {
+                                                 bool full_iterations,
+                                                 const ContactVec3<Scalar>* previous = nullptr) noexcept {
     using T = ContactScalarTraits<Scalar>;
     const Scalar zero = T::zero();
     const Scalar one = T::one();
@@ -382,6 +384,21 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
     Scalar lo = zero;                              // phi(lo) > 0 (stick rejected)
     Scalar hi = (one + mu * b_1) * e_1 / mu_c;     // phi(hi) < 0 (see header)
     Scalar kappa = detail::norm2(e[0], e[1]) / mu_c - trace_s / two;  // isotropic closed form
+    if (previous != nullptr) {
+        // Gauss-Seidel revisits the contact with a slightly different d: the kappa of the last
+        // slip force, kappa = -(S f_T + e).f_T / |f_T|^2, is then a much closer start.
+        const Scalar pt = (*previous)[1];
+        const Scalar ps = (*previous)[2];
+        const Scalar p2 = pt * pt + ps * ps;
+        if (p2 > zero) {
+            const Scalar dt = s[0] * pt + s[1] * ps + e[0];
+            const Scalar ds = s[2] * pt + s[3] * ps + e[1];
+            const Scalar guess = -(dt * pt + ds * ps) / p2;
+            if (guess > lo && guess < hi) {
+                kappa = guess;
+            }
+        }
+    }
     if (!(kappa > lo && kappa < hi)) {
         kappa = (lo + hi) / two;
     }
@@ -532,7 +549,7 @@ ContactSolveReport<Scalar, MaxContacts> solve_contacts(
                 d[2] = d[2] + w[6] * fb[0] + w[7] * fb[1] + w[8] * fb[2];
             }
             LocalContactSolution<Scalar> local = solve_local_contact(
-                p.block(a, a), d, p.friction[a], settings.local_iterations, fixed);
+                p.block(a, a), d, p.friction[a], settings.local_iterations, fixed, &forces[a]);
             if (relaxed) {
                 local.force = detail::relax_and_project(forces[a], local.force, settings.relaxation,
                                                         p.friction[a]);

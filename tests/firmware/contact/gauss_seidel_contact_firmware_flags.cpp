@@ -14,7 +14,8 @@ template ContactResiduals<float> evaluate_contact_residuals<float, 16>(
     const ContactProblem<float, 16>&, const ContactForces<float, 16>&) noexcept;
 template LocalContactSolution<float> solve_local_contact<float>(const ContactBlock3<float>&,
                                                                 const ContactVec3<float>&, float,
-                                                                std::size_t, bool) noexcept;
+                                                                std::size_t, bool,
+                                                                const ContactVec3<float>*) noexcept;
 template ContactSolveReport<double, 16> solve_contacts<double, 16>(
     const ContactProblem<double, 16>&, const GaussSeidelSettings<double>&,
     ContactForces<double, 16>&) noexcept;
