@@ -60,4 +60,33 @@ CorotationalResponse corotational_response(const CorotationalReference& ref, con
                                            const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
                                            const Eigen::Matrix3d& rotation_b, bool with_tangent);
 
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+using Mat9 = Eigen::Matrix<double, 9, 9, Eigen::RowMajor>;
+using Mat7x9 = Eigen::Matrix<double, 7, 9, Eigen::RowMajor>;  ///< row-major: rows are contiguous
+
+/// The same response on the 9 variables [dx_a, dw_a, dw_b], the form the assembly uses.
+/// Translating both nodes changes nothing, so the dx_b columns of B and of the tangents are
+/// minus the dx_a columns; the element's forces balance, so the f_b row of the internal force
+/// and of the tangents is minus the f_a row. Rows and columns are [x_a, w_a, w_b].
+struct CorotationalReducedResponse {
+  Eigen::Matrix3d frame;      ///< R_r
+  double length_mm = 0;
+  Vec7 deformation;
+  Vec7 local_force;
+  Mat7x9 b_matrix;
+  Vec9 internal_force;        ///< [f_a, m_a, m_b]; f_b = -f_a
+  Mat9 material_tangent;      ///< only filled with `with_tangent`
+  Mat9 geometric_tangent;     ///< only filled with `with_tangent`
+};
+
+void corotational_response_reduced(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,
+                                   const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
+                                   const Eigen::Matrix3d& rotation_b, bool with_tangent,
+                                   CorotationalReducedResponse& out);
+
+/// The co-rotating frame R_r alone (for the mass matrix).
+Eigen::Matrix3d corotational_frame(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,
+                                   const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
+                                   const Eigen::Matrix3d& rotation_b);
+
 }  // namespace scopekin::model

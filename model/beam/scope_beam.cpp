@@ -59,43 +59,108 @@ void ScopeBeam::apply_increment(const Eigen::VectorXd& inc) {
 }
 
 namespace {
-/// Eq. (4.6) on the updated configuration: the local mass rotated by the element's frame.
-/// The rotation is block-diagonal (4 copies of the frame), so rotate the 16 3x3 blocks.
-Mat12 global_mass(const Eigen::Matrix3d& frame, const Mat12& local_mass) {
-  Mat12 m;
+// The element loop visits elements in order, so block (e, e) already holds element e-1's share
+// when element e arrives, and blocks (e, e+1), (e+1, e), (e+1, e+1) are first touched by element
+// e: they are assigned, and the matrices never need zeroing.
+
+/// Adds a reduced element matrix (rows and columns [x_a, w_a, w_b], x_b = -x_a; see
+/// CorotationalReducedResponse) to the chain.
+void add_reduced_element(BlockTridiagonalMatrix& m, std::size_t e, const Mat9& k) {
+  const auto kxx = k.block<3, 3>(0, 0), kxa = k.block<3, 3>(0, 3), kxb = k.block<3, 3>(0, 6);
+  const auto kax = k.block<3, 3>(3, 0), kaa = k.block<3, 3>(3, 3), kab = k.block<3, 3>(3, 6);
+  const auto kbx = k.block<3, 3>(6, 0), kba = k.block<3, 3>(6, 3), kbb = k.block<3, 3>(6, 6);
+  Mat6& d0 = m.diagonal(e);
+  if (e == 0) d0.setZero();
+  d0.block<3, 3>(0, 0) += kxx;
+  d0.block<3, 3>(0, 3) += kxa;
+  d0.block<3, 3>(3, 0) += kax;
+  d0.block<3, 3>(3, 3) += kaa;
+  Mat6& up = m.upper(e);
+  up.block<3, 3>(0, 0) = -kxx;
+  up.block<3, 3>(0, 3) = kxb;
+  up.block<3, 3>(3, 0) = -kax;
+  up.block<3, 3>(3, 3) = kab;
+  Mat6& lo = m.lower(e);
+  lo.block<3, 3>(0, 0) = -kxx;
+  lo.block<3, 3>(0, 3) = -kxa;
+  lo.block<3, 3>(3, 0) = kbx;
+  lo.block<3, 3>(3, 3) = kba;
+  Mat6& d1 = m.diagonal(e + 1);
+  d1.block<3, 3>(0, 0) = kxx;
+  d1.block<3, 3>(0, 3) = -kxb;
+  d1.block<3, 3>(3, 0) = -kbx;
+  d1.block<3, 3>(3, 3) = kbb;
+}
+
+/// Eq. (4.6) on the updated configuration: the local mass rotated by the element's frame. The
+/// rotation is block-diagonal (4 copies of the frame), so each 3x3 block is R M_ij R^T; the
+/// local mass is symmetric, so the blocks below the diagonal are transposes.
+void add_element_mass(BlockTridiagonalMatrix& mass, std::size_t e, const Eigen::Matrix3d& frame,
+                      const Mat12& local_mass) {
+  Mat6& d0 = mass.diagonal(e);
+  Mat6& up = mass.upper(e);
+  Mat6& lo = mass.lower(e);
+  Mat6& d1 = mass.diagonal(e + 1);
+  if (e == 0) d0.setZero();
   for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j)
-      m.block<3, 3>(3 * i, 3 * j) = frame * local_mass.block<3, 3>(3 * i, 3 * j) * frame.transpose();
-  return m;
+    for (int j = i; j < 4; ++j) {
+      const Eigen::Matrix3d fm = frame * local_mass.block<3, 3>(3 * i, 3 * j);
+      Eigen::Matrix3d g;
+      g.noalias() = fm * frame.transpose();
+      // Block (i, j) of the 12x12 element matrix, and its mirror (j, i) = (i, j)^T.
+      const int bi = i % 2, bj = j % 2;
+      if (j < 2) {
+        d0.block<3, 3>(3 * bi, 3 * bj) += g;
+        if (i != j) d0.block<3, 3>(3 * bj, 3 * bi) += g.transpose();
+      } else if (i >= 2) {
+        d1.block<3, 3>(3 * bi, 3 * bj) = g;
+        if (i != j) d1.block<3, 3>(3 * bj, 3 * bi) = g.transpose();
+      } else {
+        up.block<3, 3>(3 * bi, 3 * bj) = g;
+        lo.block<3, 3>(3 * bj, 3 * bi) = g.transpose();
+      }
+    }
+}
+
+void ensure_blocks(BlockTridiagonalMatrix& m, std::size_t blocks) {
+  if (m.block_count() != blocks) m.resize(blocks);
 }
 }  // namespace
 
 void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass) const {
-  out.internal_force = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(dof_count()));
+  const auto dofs = static_cast<Eigen::Index>(dof_count());
+  if (out.internal_force.size() != dofs) out.internal_force.resize(dofs);
+  out.internal_force.setZero();
   if (with_tangent) {
-    out.tangent.resize(node_count());
-    out.material_tangent.resize(node_count());
+    ensure_blocks(out.tangent, node_count());
+    ensure_blocks(out.material_tangent, node_count());
   }
-  if (mass != nullptr) mass->resize(node_count());
+  if (mass != nullptr) ensure_blocks(*mass, node_count());
+  CorotationalReducedResponse resp;
+  Mat9 tangent;
   for (std::size_t e = 0; e < element_count(); ++e) {
-    const CorotationalResponse resp = corotational_response(references_[e], positions_[e], rotations_[e],
-                                                            positions_[e + 1], rotations_[e + 1], with_tangent);
-    out.internal_force.segment<12>(static_cast<Eigen::Index>(6 * e)) += resp.internal_force;
+    corotational_response_reduced(references_[e], positions_[e], rotations_[e], positions_[e + 1], rotations_[e + 1],
+                                  with_tangent, resp);
+    const auto r = static_cast<Eigen::Index>(6 * e);
+    out.internal_force.segment<6>(r) += resp.internal_force.head<6>();
+    out.internal_force.segment<3>(r + 6) -= resp.internal_force.head<3>();  // f_b = -f_a
+    out.internal_force.segment<3>(r + 9) += resp.internal_force.tail<3>();
     if (with_tangent) {
-      out.material_tangent.add_element(e, resp.material_tangent);
-      out.tangent.add_element(e, resp.material_tangent + resp.geometric_tangent);
+      add_reduced_element(out.material_tangent, e, resp.material_tangent);
+      tangent = resp.material_tangent + resp.geometric_tangent;
+      add_reduced_element(out.tangent, e, tangent);
     }
-    if (mass != nullptr) mass->add_element(e, global_mass(resp.kinematics.frame, references_[e].local_mass));
+    if (mass != nullptr) add_element_mass(*mass, e, resp.frame, references_[e].local_mass);
   }
 }
 
 void ScopeBeam::assemble_mass(BlockTridiagonalMatrix& mass) const {
-  mass.resize(node_count());
-  for (std::size_t e = 0; e < element_count(); ++e) {
-    const CorotationalKinematics k = corotational_kinematics(references_[e], positions_[e], rotations_[e],
-                                                             positions_[e + 1], rotations_[e + 1]);
-    mass.add_element(e, global_mass(k.frame, references_[e].local_mass));
-  }
+  ensure_blocks(mass, node_count());
+  for (std::size_t e = 0; e < element_count(); ++e)
+    add_element_mass(mass, e,
+                     corotational_frame(references_[e], positions_[e], rotations_[e], positions_[e + 1],
+                                        rotations_[e + 1]),
+                     references_[e].local_mass);
 }
 
 Eigen::VectorXd ScopeBeam::gravity_load(const Eigen::Vector3d& g) const {

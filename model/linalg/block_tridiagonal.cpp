@@ -89,44 +89,77 @@ Eigen::MatrixXd BlockTridiagonalMatrix::to_dense() const {
   return d;
 }
 
+namespace {
+using Augmented = Eigen::Matrix<double, 6, 18, Eigen::RowMajor>;  // [D' | U | I], rows contiguous
+
+/// Gauss-Jordan elimination with partial pivoting on [D' | U | I] -> [I | D'^-1 U | D'^-1]. The
+/// pivots are those of an LU with partial pivoting, i.e. the diagonal of U; returns whether they
+/// pass the singularity test: a vanishing pivot relative to the largest one (a ratio test, so
+/// blocks mixing N/mm and N mm/rad scales still pass).
+bool gauss_jordan(Augmented& w) {
+  Vec6 pivots;
+  for (Eigen::Index k = 0; k < 6; ++k) {
+    Eigen::Index p = k;
+    for (Eigen::Index r = k + 1; r < 6; ++r)
+      if (std::abs(w(r, k)) > std::abs(w(p, k))) p = r;
+    if (p != k) w.row(k).swap(w.row(p));
+    const double pivot = w(k, k);
+    pivots(k) = std::abs(pivot);
+    w.row(k) *= 1.0 / pivot;
+    for (Eigen::Index r = 0; r < 6; ++r)
+      if (r != k) w.row(r) -= w(r, k) * w.row(k);
+  }
+  const double largest = pivots.maxCoeff();
+  return std::isfinite(largest) && largest > 0.0 && pivots.minCoeff() > 1e-14 * largest;
+}
+}  // namespace
+
 bool BlockTridiagonalSolver::factorize(const BlockTridiagonalMatrix& a) {
   const std::size_t n = a.block_count();
-  pivots_.clear();
-  pivots_.reserve(n);
-  multipliers_.assign(n > 0 ? n - 1 : 0, Mat6::Zero());
-  upper_.assign(n > 0 ? n - 1 : 0, Mat6::Zero());
-  Mat6 pivot = n > 0 ? a.diagonal(0) : Mat6::Zero();
+  blocks_ = 0;
+  inverse_pivots_.resize(n);
+  reduced_upper_.resize(n > 0 ? n - 1 : 0);
+  lower_.resize(n > 0 ? n - 1 : 0);
+  Augmented w;
+  w.leftCols<6>() = n > 0 ? a.diagonal(0) : Mat6::Zero();
   for (std::size_t i = 0; i < n; ++i) {
-    pivots_.emplace_back(pivot);
-    // A singular 6x6 pivot shows up as a vanishing diagonal entry of its U factor relative to
-    // the largest one (a ratio test, so blocks mixing N/mm and N mm/rad scales still pass).
-    const Vec6 u_diagonal = pivots_.back().matrixLU().diagonal().cwiseAbs();
-    const double largest = u_diagonal.maxCoeff();
-    if (!std::isfinite(largest) || !(largest > 0.0) || u_diagonal.minCoeff() <= 1e-14 * largest) return false;
-    if (i + 1 < n) {
-      upper_[i] = a.upper(i);
-      multipliers_[i] = a.lower(i) * pivots_.back().inverse();
-      pivot = a.diagonal(i + 1) - multipliers_[i] * a.upper(i);
+    const bool last = i + 1 == n;
+    if (last) w.middleCols<6>(6).setZero();
+    else w.middleCols<6>(6) = a.upper(i);
+    w.rightCols<6>().setIdentity();
+    if (!gauss_jordan(w)) return false;
+    inverse_pivots_[i] = w.rightCols<6>();
+    if (!last) {
+      reduced_upper_[i] = w.middleCols<6>(6);
+      lower_[i] = a.lower(i);
+      w.leftCols<6>() = a.diagonal(i + 1);
+      w.leftCols<6>().noalias() -= lower_[i].lazyProduct(reduced_upper_[i]);
     }
   }
+  blocks_ = n;
   return true;
 }
 
 Eigen::VectorXd BlockTridiagonalSolver::solve(const Eigen::VectorXd& rhs) const {
-  const std::size_t n = pivots_.size();
-  Eigen::VectorXd y = rhs;
-  for (std::size_t i = 1; i < n; ++i) {
-    const auto r = static_cast<Eigen::Index>(6 * i);
-    y.segment<6>(r) -= multipliers_[i - 1] * y.segment<6>(r - 6);
-  }
-  Eigen::VectorXd x(y.size());
-  for (std::size_t k = n; k-- > 0;) {
-    const auto r = static_cast<Eigen::Index>(6 * k);
-    Vec6 v = y.segment<6>(r);
-    if (k + 1 < n) v -= upper_[k] * x.segment<6>(r + 6);
-    x.segment<6>(r) = pivots_[k].solve(v);
-  }
+  Eigen::VectorXd x = rhs;
+  solve_in_place(x);
   return x;
+}
+
+void BlockTridiagonalSolver::solve_in_place(Eigen::VectorXd& x) const {
+  const std::size_t n = blocks_;
+  // Forward: g_i = D'_i^-1 (b_i - L_{i-1} g_{i-1}); backward: x_i = g_i - W_i x_{i+1}.
+  Vec6 v;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto r = static_cast<Eigen::Index>(6 * i);
+    v = x.segment<6>(r);
+    if (i > 0) v.noalias() -= lower_[i - 1] * x.segment<6>(r - 6);
+    x.segment<6>(r).noalias() = inverse_pivots_[i] * v;
+  }
+  for (std::size_t k = n - (n > 0 ? 1 : 0); k-- > 0;) {
+    const auto r = static_cast<Eigen::Index>(6 * k);
+    x.segment<6>(r).noalias() -= reduced_upper_[k] * x.segment<6>(r + 6);
+  }
 }
 
 }  // namespace scopekin::model

@@ -49,15 +49,21 @@ class BlockTridiagonalMatrix {
 
 /// Factorises a copy and solves; returns false if a pivot block is singular or the result
 /// is not finite (for example a beam with no support in a static solve).
+/// Block Thomas algorithm: D'_0 = D_0, W_i = D'_i^-1 U_i, D'_{i+1} = D_{i+1} - L_i W_i. Each pivot
+/// block is inverted once (Gauss-Jordan with partial pivoting, which also yields W_i), so the
+/// solves are plain 6x6 matrix-vector products. Storage is reused between factorisations.
 class BlockTridiagonalSolver {
  public:
   bool factorize(const BlockTridiagonalMatrix& a);
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs) const;
+  /// Solves in place: `x` holds the right-hand side on entry and the solution on return.
+  void solve_in_place(Eigen::VectorXd& x) const;
 
  private:
-  std::vector<Eigen::PartialPivLU<Mat6>> pivots_;
-  std::vector<Mat6> upper_;
-  std::vector<Mat6> multipliers_;  // L'_i = L_i D'_{i-1}^-1
+  std::size_t blocks_ = 0;
+  std::vector<Mat6> inverse_pivots_;  // D'_i^-1
+  std::vector<Mat6> reduced_upper_;   // W_i = D'_i^-1 U_i
+  std::vector<Mat6> lower_;           // L_i = A(i+1, i)
 };
 
 }  // namespace scopekin::model

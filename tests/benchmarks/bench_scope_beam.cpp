@@ -3,10 +3,13 @@
 // Run: build/host/tests/benchmarks/scopekin_bench_scope_beam
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+
 #include "model/beam/scope_beam.hpp"
 #include "model/scope/cf_q160l.hpp"
 #include "model/solvers/dynamic_solver.hpp"
 #include "model/solvers/newton_system.hpp"
+#include "model/solvers/rayleigh_damping.hpp"
 
 namespace {
 using namespace scopekin::model;
@@ -79,6 +82,61 @@ void BM_CorotationalElement(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_CorotationalElement)->Unit(benchmark::kNanosecond);
+
+/// The 170-element scope bent into a twisted arc (radius 300 mm, node rotations a little off
+/// the chord frames), so every element has non-trivial deformation: realistic trig branches.
+ScopeBeam make_bent_scope() {
+  ScopeBeam scope = make_scope();
+  const double radius_mm = 300.0;
+  for (std::size_t i = 0; i < scope.node_count(); ++i) {
+    const double s = scope.arc_length_mm(i);
+    const double a = s / radius_mm;
+    const Eigen::Vector3d x(radius_mm * std::sin(a), radius_mm * (1.0 - std::cos(a)), 0.02 * s);
+    const Eigen::Matrix3d r = (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()) *
+                               Eigen::AngleAxisd(0.002 * static_cast<double>(i), Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
+    scope.set_pose(i, x, r);
+  }
+  return scope;
+}
+
+// One assembly as the world time step does it: internal force, material and full tangent and
+// the consistent mass, in one pass over the elements. Argument: number of elements (170).
+void BM_AssembleWithMass(benchmark::State& state) {
+  const ScopeBeam scope = make_bent_scope();
+  ScopeBeam::Assembly assembly;
+  BlockTridiagonalMatrix mass;
+  for (auto _ : state) {
+    scope.assemble(assembly, true, &mass);
+    benchmark::DoNotOptimize(assembly.internal_force.data());
+    benchmark::DoNotOptimize(&mass.diagonal(0));
+  }
+}
+BENCHMARK(BM_AssembleWithMass)->Arg(170)->Unit(benchmark::kMicrosecond);
+
+// Factorisation of M/h^2 + C/h + K_T (h = 10 ms, thesis Rayleigh damping, handle clamped at
+// node 0) and one solve, as in the world time step. Argument: number of elements (170).
+void BM_FactorizeSolve(benchmark::State& state) {
+  const ScopeBeam scope = make_bent_scope();
+  ScopeBeam::Assembly assembly;
+  BlockTridiagonalMatrix mass;
+  scope.assemble(assembly, true, &mass);
+  const double h = 0.010;
+  const RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
+  BlockTridiagonalMatrix system = assembly.tangent;
+  system.add_scaled(mass, 1.0 / (h * h) + damping.mass_coefficient_per_s / h);
+  system.add_scaled(assembly.material_tangent, damping.stiffness_coefficient_s / h);
+  for (std::size_t dof = 0; dof < 6; ++dof) system.constrain_dof(dof);
+  Eigen::VectorXd rhs = assembly.internal_force;
+  rhs.head<6>().setZero();
+  BlockTridiagonalSolver solver;
+  for (auto _ : state) {
+    if (!solver.factorize(system)) state.SkipWithError("singular");
+    Eigen::VectorXd x = solver.solve(rhs);
+    benchmark::DoNotOptimize(x.data());
+  }
+}
+BENCHMARK(BM_FactorizeSolve)->Arg(170)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
