@@ -1,5 +1,7 @@
 #include "model/beam/scope_beam.hpp"
 
+#include <algorithm>
+
 #include <string>
 
 #include "model/beam/rotation.hpp"
@@ -127,7 +129,8 @@ void ensure_blocks(BlockTridiagonalMatrix& m, std::size_t blocks) {
 }
 }  // namespace
 
-void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass) const {
+void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass,
+                         std::size_t first_element) const {
   const auto dofs = static_cast<Eigen::Index>(dof_count());
   if (out.internal_force.size() != dofs) out.internal_force.resize(dofs);
   out.internal_force.setZero();
@@ -136,9 +139,22 @@ void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatri
     ensure_blocks(out.material_tangent, node_count());
   }
   if (mass != nullptr) ensure_blocks(*mass, node_count());
+  // Skipped elements contribute nothing: clear their blocks (the loop below assigns blocks that
+  // element e touches first, so only the ones before first_element can hold stale values).
+  first_element = std::min(first_element, element_count());
+  if (first_element > 0) {
+    for (BlockTridiagonalMatrix* m : {with_tangent ? &out.tangent : nullptr, with_tangent ? &out.material_tangent : nullptr, mass}) {
+      if (m == nullptr) continue;
+      for (std::size_t i = 0; i <= first_element && i < node_count(); ++i) m->diagonal(i).setZero();
+      for (std::size_t i = 0; i < first_element; ++i) {
+        m->upper(i).setZero();
+        m->lower(i).setZero();
+      }
+    }
+  }
   CorotationalReducedResponse resp;
   Mat9 tangent;
-  for (std::size_t e = 0; e < element_count(); ++e) {
+  for (std::size_t e = first_element; e < element_count(); ++e) {
     corotational_response_reduced(references_[e], positions_[e], rotations_[e], positions_[e + 1], rotations_[e + 1],
                                   with_tangent, resp);
     const auto r = static_cast<Eigen::Index>(6 * e);

@@ -51,7 +51,10 @@ class ScopeBeam {
   };
   /// Internal force, and with `with_tangent` the tangents; with `mass` also the mass matrix
   /// (same as assemble_mass, computed in the same pass over the elements).
-  void assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass = nullptr) const;
+  /// Elements before `first_element` are skipped (their blocks and forces are zero): the world
+  /// leaves out the shaft outside the body, which the hand moves rigidly.
+  void assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatrix* mass = nullptr,
+                std::size_t first_element = 0) const;
   /// Consistent mass (Eq. 4.5) rotated into each element's current frame (Eq. 4.6 on the
   /// updated configuration). Gyroscopic terms are neglected (slow rotation rates).
   void assemble_mass(BlockTridiagonalMatrix& mass) const;

@@ -233,12 +233,20 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
     }
   }
 
+  // Under full position control the hand moves the outside shaft rigidly: the elements between
+  // held nodes carry no strain, and their inertia is the hand's business, not the colon's. They
+  // are left out, so the cost follows the inserted length. The last held node (at the anus) keeps
+  // its element into the body, whose force is the handle force.
+  std::size_t first_element = 0;
+  if (!command.force_controlled && !command.torque_controlled)
+    while (first_element + 1 < nodes && held[first_element + 1]) ++first_element;
+
   // 3. Free motion: Newton on (M/h^2 + C/h + K_T) d = r, M and C frozen at the step's start.
   Eigen::VectorXd increment_total = Eigen::VectorXd::Zero(dofs);
   Eigen::VectorXd last_residual, last_increment;
   Eigen::VectorXd momentum;
   for (int it = 0; it < settings_.newton_iterations; ++it) {
-    scope_.assemble(assembly_, true, it == 0 ? &mass_ : nullptr);
+    scope_.assemble(assembly_, true, it == 0 ? &mass_ : nullptr, first_element);
     const double a_damp = settings_.damping.mass_coefficient_per_s, b_damp = settings_.damping.stiffness_coefficient_s;
     unconstrained_ = geometric_tangent ? assembly_.tangent : assembly_.material_tangent;
     Eigen::VectorXd residual = f_ext - assembly_.internal_force;
