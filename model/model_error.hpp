@@ -17,5 +17,7 @@ void require_positive(double value, const std::string& field);
 void require_non_negative(double value, const std::string& field);
 /// Throws unless value is finite.
 void require_finite(double value, const std::string& field);
+/// A number as it appears in error messages (shortest stream form, e.g. "0.25", "1e-06").
+std::string number_text(double value);
 
 }  // namespace scopekin::model

@@ -142,6 +142,17 @@ void prepare_directory(const fs::path& dir) {
   remove_stale_outputs(dir);
 }
 
+/// The keys every summary.json starts with.
+Json summary_header(const model::Scenario& sc, const char* kind, bool complete, const std::string& message) {
+  Json summary;
+  summary["scenario"] = sc.source;
+  summary["kind"] = kind;
+  summary["description"] = sc.description;
+  summary["status"] = complete ? "complete" : "failed";
+  summary["message"] = message;
+  return summary;
+}
+
 void write_summary(const fs::path& path, const Json& summary) {
   std::ofstream out(path);
   out << summary.dump(2) << "\n";
@@ -224,12 +235,7 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
   Json files = Json::object();
   files["recording"] = recording_file.filename().string();
   if (contacts) files["contacts"] = contacts_file.filename().string();
-  Json summary;
-  summary["scenario"] = sc.source;
-  summary["kind"] = "world";
-  summary["description"] = sc.description;
-  summary["status"] = sum.complete ? "complete" : "failed";
-  summary["message"] = sum.message;
+  Json summary = summary_header(sc, "world", sum.complete, sum.message);
   summary["failure_time_s"] = sum.complete ? Json(nullptr) : Json(sum.failure_time_s);
   summary["end_time_s"] = sum.end_time_s;
   summary["simulated_time_s"] = sum.simulated_time_s;
@@ -292,12 +298,7 @@ int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
   const fs::path recording_file = recording.finish(report.converged);
   std::size_t accepted = 0;
   for (const auto& s : report.steps) accepted += s.converged ? 1 : 0;
-  Json summary;
-  summary["scenario"] = sc.source;
-  summary["kind"] = "free_beam";
-  summary["description"] = sc.description;
-  summary["status"] = report.converged ? "complete" : "failed";
-  summary["message"] = report.message;
+  Json summary = summary_header(sc, "free_beam", report.converged, report.message);
   summary["converged"] = report.converged;
   summary["newton_iterations"] = report.total_iterations;
   summary["load_steps_accepted"] = accepted;

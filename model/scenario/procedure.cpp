@@ -9,12 +9,6 @@
 namespace scopekin::model {
 namespace {
 
-std::string number_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 /// Largest and smallest of sin(x) for x in [0, x_end] (x_end >= 0).
 std::pair<double, double> sine_range(double x_end) {
   const double hi = x_end >= 0.5 * M_PI ? 1.0 : std::sin(x_end);

@@ -15,12 +15,6 @@ namespace {
 
 using io::JsonObject;
 
-std::string number_text(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 std::string item(const std::string& path, std::size_t i) { return path + "[" + std::to_string(i) + "]"; }
 
 std::string region_list() {

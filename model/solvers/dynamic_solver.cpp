@@ -10,11 +10,7 @@
 namespace scopekin::model {
 
 void DynamicSettings::validate() const {
-  require_positive(time_step_s, "dynamic.time_step_s");
-  if (time_step_s < 0.001 - 1e-12 || time_step_s > 0.033 + 1e-12)
-    throw ModelError("dynamic.time_step_s: " + std::to_string(time_step_s) + " s is outside [0.001, 0.033] s");
-  require_non_negative(damping.mass_coefficient_per_s, "dynamic.damping.mass_coefficient_per_s");
-  require_non_negative(damping.stiffness_coefficient_s, "dynamic.damping.stiffness_coefficient_s");
+  validate_time_step_and_damping(time_step_s, damping, "dynamic");
   if (max_iterations < 1) throw ModelError("dynamic.max_iterations: must be >= 1");
   require_positive(relative_tolerance, "dynamic.relative_tolerance");
 }

@@ -19,4 +19,12 @@ double RayleighDamping::damping_ratio(double frequency_hz) const {
   return mass_coefficient_per_s / (2.0 * w) + stiffness_coefficient_s * w / 2.0;
 }
 
+void validate_time_step_and_damping(double time_step_s, const RayleighDamping& damping, const std::string& prefix) {
+  require_positive(time_step_s, prefix + ".time_step_s");
+  if (time_step_s < 0.001 - 1e-12 || time_step_s > 0.033 + 1e-12)
+    throw ModelError(prefix + ".time_step_s: " + std::to_string(time_step_s) + " s is outside [0.001, 0.033] s");
+  require_non_negative(damping.mass_coefficient_per_s, prefix + ".damping.mass_coefficient_per_s");
+  require_non_negative(damping.stiffness_coefficient_s, prefix + ".damping.stiffness_coefficient_s");
+}
+
 }  // namespace scopekin::model

@@ -1,4 +1,5 @@
 #pragma once
+#include <string>
 // Rayleigh damping C = a M + b K (thesis Eq. 4.7, values Eq. 4.15).
 //
 // Units trap (PHYSICS.md Sec. 2): the thesis's a = 0.3864, b = 0.0164 satisfy
@@ -18,5 +19,9 @@ struct RayleighDamping {
   /// Modal damping ratio of a mode with natural frequency f [Hz]: zeta = a'/(2w) + b' w/2.
   double damping_ratio(double frequency_hz) const;
 };
+
+/// Checks an implicit time step (in [0.001, 0.033] s) and damping coefficients (>= 0); errors
+/// name the fields under `prefix` ("dynamic", "solver").
+void validate_time_step_and_damping(double time_step_s, const RayleighDamping& damping, const std::string& prefix);
 
 }  // namespace scopekin::model

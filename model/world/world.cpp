@@ -46,11 +46,7 @@ void WorldContactSettings::validate() const {
 }
 
 void WorldSettings::validate() const {
-  require_positive(time_step_s, "solver.time_step_s");
-  if (time_step_s < 0.001 - 1e-12 || time_step_s > 0.033 + 1e-12)
-    throw ModelError("solver.time_step_s: " + std::to_string(time_step_s) + " s is outside [0.001, 0.033] s");
-  require_non_negative(damping.mass_coefficient_per_s, "solver.damping.mass_coefficient_per_s");
-  require_non_negative(damping.stiffness_coefficient_s, "solver.damping.stiffness_coefficient_s");
+  validate_time_step_and_damping(time_step_s, damping, "solver");
   if (newton_iterations < 1 || newton_iterations > 50) throw ModelError("solver.newton_iterations: must be in [1, 50]");
   if (!gravity_mm_per_s2.allFinite()) throw ModelError("gravity_mm_per_s2: not finite");
   require_non_negative(initial_insertion_mm, "initial_insertion_mm");
