@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "model/beam/rotation.hpp"
@@ -394,6 +395,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
       r.normal = to_body_direction(c.frame.col(0));
       r.normal_force_N = forces[a][0];
       r.tangential_force_N = std::hypot(forces[a][1], forces[a][2]);
+      r.force_N = to_body_direction(c.frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]));
       r.friction_coefficient = mu[a];
       r.driving_angle_rad = r.normal_force_N > 0.0 ? std::atan2(r.tangential_force_N, r.normal_force_N) : 0.0;
       r.gap_mm = delta[0];
@@ -434,6 +436,117 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
   report.contacts = nc;
   report.ok = true;
   return report;
+}
+
+}  // namespace scopekin::model
+
+namespace scopekin::model {
+
+StationCompliance World::probe_stations(const std::vector<std::size_t>& nodes, double search_back_mm) {
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (nodes[i] >= scope_.node_count() || (i > 0 && nodes[i] <= nodes[i - 1]))
+      throw ModelError("probe_stations: scope nodes must be strictly increasing and exist");
+  StationCompliance out;
+  const std::size_t k = nodes.size();
+  out.stations.resize(k);
+  out.compliance_mm_per_N = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * k), static_cast<Eigen::Index>(3 * k));
+  const double depth = insertion_depth_mm();
+  std::vector<Eigen::Vector3d> colon_u;
+  compliance_->displacement(colon_forces_, colon_u);
+  std::vector<Eigen::Vector3d> colon(colon_rest_mm_.size());
+  for (std::size_t i = 0; i < colon.size(); ++i) colon[i] = colon_rest_mm_[i] + colon_u[i];
+  const auto& points = tube_.points();
+  std::vector<Eigen::Matrix3d> frames(k, Eigen::Matrix3d::Identity());
+  for (std::size_t a = 0; a < k; ++a) {
+    StationProbe& p = out.stations[a];
+    p.scope_node = nodes[a];
+    const Eigen::Vector3d x = scope_.position(nodes[a]);
+    const double expected = depth - arc_from_tip_mm(nodes[a]);
+    p.inside = x.x() > 1e-9 && expected > 0.0;
+    if (!p.inside) continue;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j + 1 < colon.size(); ++j) {
+      if (tube_.arc_length_mm(j + 1) < expected - search_back_mm || tube_.arc_length_mm(j) > expected + 5.0) continue;
+      const Eigen::Vector3d d = colon[j + 1] - colon[j];
+      const double w = std::clamp((x - colon[j]).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      const double dist = (colon[j] + w * d - x).norm();
+      if (dist < best) {
+        best = dist;
+        p.colon_segment = j;
+        p.colon_weight = w;
+      }
+    }
+    const std::size_t j = p.colon_segment;
+    const double w = p.colon_weight;
+    const Eigen::Vector3d c = colon[j] + w * (colon[j + 1] - colon[j]);
+    const Eigen::Vector3d axis = (colon[j + 1] - colon[j]).normalized();
+    p.path_mm = tube_.arc_length_mm(j) + w * (tube_.arc_length_mm(j + 1) - tube_.arc_length_mm(j));
+    const double lumen = (1.0 - w) * points[j].inner_radius_mm + w * points[j + 1].inner_radius_mm;
+    p.gap_mm = lumen - scope_radius_mm_ - best;
+    p.region = points[j].region;
+    // n from the scope towards the centerline (the way the wall pushes); when the scope sits on
+    // the centerline any direction across the axis will do: take the one towards gravity's opposite.
+    Eigen::Vector3d n = c - x;
+    n -= n.dot(axis) * axis;
+    if (n.norm() < 1e-6) {
+      n = -gravity_ - (-gravity_).dot(axis) * axis;
+      if (n.norm() < 1e-9) n = axis.unitOrthogonal();
+    }
+    n.normalize();
+    const Eigen::Vector3d t = (axis - axis.dot(n) * n).normalized();
+    frames[a].col(0) = n;
+    frames[a].col(1) = t;
+    frames[a].col(2) = n.cross(t);
+    p.frame = rotation_.transpose() * frames[a];
+  }
+  // Quasi-static tangent with the handle held (position control of depth and roll).
+  std::vector<bool> held(scope_.node_count(), false);
+  std::size_t first_element = 0;
+  for (std::size_t n = 0; n < scope_.node_count(); ++n) held[n] = n == 0 || scope_.position(n).x() <= 1e-9;
+  while (first_element + 1 < scope_.node_count() && held[first_element + 1]) ++first_element;
+  ScopeBeam::Assembly assembly;
+  Eigen::MatrixXd blocks;
+  std::vector<std::size_t> inside_nodes;
+  std::vector<std::size_t> inside_index;
+  for (std::size_t a = 0; a < k; ++a)
+    if (out.stations[a].inside) {
+      inside_nodes.push_back(nodes[a]);
+      inside_index.push_back(a);
+    }
+  bool formed = inside_nodes.empty();
+  for (int tangent = 0; tangent < 2 && !formed; ++tangent) {
+    scope_.assemble(assembly, true, nullptr, first_element);
+    BlockTridiagonalMatrix system = tangent == 0 ? assembly.tangent : assembly.material_tangent;
+    for (std::size_t n = 0; n < scope_.node_count(); ++n)
+      if (held[n] || n < first_element)
+        for (std::size_t d = 0; d < 6; ++d) system.constrain_dof(6 * n + d);
+    SelectedInverse inverse;
+    formed = inverse.translational_blocks(system, inside_nodes, blocks);
+    // The full tangent of a compressed, buckled shaft is indefinite: its "compliance" would have
+    // negative directions. Use the material tangent then.
+    if (formed && tangent == 0)
+      for (std::size_t a = 0; a < inside_nodes.size() && formed; ++a) {
+        const Eigen::Matrix3d diag = blocks.block<3, 3>(static_cast<Eigen::Index>(3 * a), static_cast<Eigen::Index>(3 * a));
+        formed = diag.trace() > 0.0 && Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (diag + diag.transpose())).eigenvalues().minCoeff() > 0.0;
+      }
+  }
+  if (!formed) throw ModelError("probe_stations: the scope's tangent stiffness is singular");
+  for (std::size_t ia = 0; ia < inside_index.size(); ++ia)
+    for (std::size_t ib = 0; ib < inside_index.size(); ++ib) {
+      const std::size_t a = inside_index[ia], b = inside_index[ib];
+      const StationProbe& pa = out.stations[a];
+      const StationProbe& pb = out.stations[b];
+      Eigen::Matrix3d w = frames[a].transpose() *
+                          (blocks.block<3, 3>(static_cast<Eigen::Index>(3 * ia), static_cast<Eigen::Index>(3 * ib)) +
+                           compliance_->point_block(pa.colon_segment, pa.colon_weight, pb.colon_segment, pb.colon_weight)) *
+                          frames[b];
+      if (a == b) w += settings_.contact.wall_compliance_mm_per_N * Eigen::Matrix3d::Identity();
+      out.compliance_mm_per_N.block<3, 3>(static_cast<Eigen::Index>(3 * a), static_cast<Eigen::Index>(3 * b)) = w;
+    }
+  for (std::size_t a = 0; a < k; ++a)
+    if (!out.stations[a].inside)
+      out.compliance_mm_per_N.block<3, 3>(static_cast<Eigen::Index>(3 * a), static_cast<Eigen::Index>(3 * a)).setIdentity();
+  return out;
 }
 
 }  // namespace scopekin::model

@@ -97,6 +97,27 @@ struct HandleCommand {
   double torque_Nmm = 0;          ///< applied torque about the entry axis (torque control)
 };
 
+/// A scope node seen from the colon, and the quasi-static compliance between such nodes
+/// (World::probe_stations): what the firmware's reduced model is built from (model/reduction).
+struct StationProbe {
+  std::size_t scope_node = 0;
+  double path_mm = 0;            ///< arc length along the colon centerline of the closest point
+  std::size_t colon_segment = 0;
+  double colon_weight = 0;
+  double gap_mm = 0;             ///< lumen radius - scope radius - distance from the centerline
+  ColonRegion region = ColonRegion::rectum;
+  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< columns n (wall -> scope), t (along the colon), s; body frame
+  bool inside = false;           ///< past the anus
+};
+struct StationCompliance {
+  std::vector<StationProbe> stations;
+  /// 3k x 3k, blocks (a, b) in the frames of a (rows) and b (columns) [mm/N]: the quasi-static
+  /// tangent compliance of the scope (handle held) + the colon's compliance at the closest
+  /// centerline points + the wall compliance on the diagonal blocks. Rows/columns of stations
+  /// outside the body are zero except 1 on the diagonal.
+  Eigen::MatrixXd compliance_mm_per_N;
+};
+
 /// One contact after a step, in the body frame.
 struct WorldContact {
   std::size_t scope_node = 0;
@@ -106,6 +127,7 @@ struct WorldContact {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< wall -> scope
   double normal_force_N = 0;
   double tangential_force_N = 0;
+  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< the wall's force on the scope (normal + friction)
   double friction_coefficient = 0;
   /// Driving-force angle alpha = atan(|f_T| / f_n) (thesis 2.2.1); stick needs alpha < atan(mu).
   double driving_angle_rad = 0;
@@ -159,6 +181,13 @@ class World {
   const ColonTube& colon() const { return body_tube_; }
   /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
   const ScopeBeam& scope_computation_frame() const { return scope_; }
+  /// The given scope nodes (strictly increasing) against the colon in its current shape: where
+  /// they are along the centerline and the quasi-static compliance between them (K_T^-1 of the
+  /// scope with the handle held, material tangent where the full one is indefinite). Each node's
+  /// closest centerline point is searched along the colon within [depth - arc_from_tip -
+  /// search_back_mm, depth - arc_from_tip + 5 mm]: a shaft cannot be further along the colon than
+  /// its length allows, and the window keeps a node off other turns of a loop.
+  StationCompliance probe_stations(const std::vector<std::size_t>& nodes, double search_back_mm = 400.0);
   /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.
   double scope_energy_Nmm() const;
 
