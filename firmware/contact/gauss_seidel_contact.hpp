@@ -1,10 +1,12 @@
 // gauss_seidel_contact.hpp — ONE frictional contact solver for the firmware and the model.
 //
-// Header-only C++20 template, instantiated for `double` by the reference model (model/, now) and
-// for the firmware's fixed-point scalar (later).  Portable on purpose: no Eigen, no heap, no
-// exceptions, no RTTI, no recursion, every loop bounded by MaxContacts, an explicitly passed
-// count, or a settings field.  Only +, -, *, /, comparisons and ContactScalarTraits<Scalar>
-// (zero, one, epsilon, abs, sqrt) are applied to Scalar.
+// Header-only C++20 template, instantiated for `double` by the reference model (model/), for
+// `float` and for the firmware's fixed-point scalar fixed_point::Q16_16 (tests on every target).
+// Portable on purpose: no Eigen, no heap, no exceptions, no RTTI, no recursion, every loop
+// bounded by MaxContacts, an explicitly passed count, or a settings field.  Only +, -, *, /,
+// comparisons and ContactScalarTraits<Scalar> (constants, abs, sqrt, hypot, a product
+// accumulator, the local scale and the kappa limit — listed where the traits are declared) are
+// applied to Scalar.
 //
 // ------------------------------------------------------------------------------------------------
 // Problem (thesis 4.4, Eq. 4.19-4.23; Duriez et al. 2006; SOFA LCPcalc)
@@ -52,7 +54,7 @@
 //                   slip state: delta_n = 0, f_T antiparallel to delta_T, ||f_T|| = mu f_n (hence
 //                   f_n >= 0).  mu = 0 is the frictionless case f = (c, 0, 0).
 //                   Finally f_n is clamped to >= 0 and f_T is scaled back onto the cone if
-//                   rounding left it outside.
+//                   rounding (or, in fixed point, the clamp of kappa_hi) left it outside.
 // Over-relaxation (projected SOR, optional): with omega = settings.relaxation in (0, 2) each local
 // result is moved to f_a + omega (f_local - f_a) and projected back (f_n >= 0, ||f_T|| <= mu f_n).
 // Contacts along a beam lying on a wall couple strongly (smooth, slowly converging modes), and
@@ -65,7 +67,8 @@
 // worst case below and the sweep count does not depend on the data (the per-contact branch —
 // separated, stick, slip — still does; the slip branch is the most expensive).  Worst case work:
 // max_sweeps * n * (n-1) 3x3 block products plus max_sweeps * n local solves of at most
-// local_iterations root-finder steps each (each step: one 2x2 solve, one sqrt).
+// local_iterations root-finder steps each (each step: one 2x2 solve, one hypot), plus two more
+// 2x2 solves per slip solve (the final f_T and, fixed point only, phi at the clamped kappa_hi).
 //
 // Convergence assumptions: each W_aa is positive definite (checked: W_nn > 0 and det S > 0; a
 // contact that fails is reported `degenerate` and gets f = 0).  For mu = 0 the sweep is projected
@@ -89,61 +92,214 @@
 //                     disc's normal cone at f_T, i.e. stick with delta_T = 0 or slip opposite delta_T)
 //
 // ------------------------------------------------------------------------------------------------
-// Scaling and overflow (to be completed with the fixed-point instantiation, firmware issue)
+// Scaling and overflow (CMSIS-DSP style; the Q16_16 instantiation)
 // ------------------------------------------------------------------------------------------------
-// A fixed-point Scalar must provide +, -, *, / (saturating), comparisons, value-initialisation to
-// zero and a ContactScalarTraits specialisation (sqrt by integer Newton/bit-by-bit, abs,
-// epsilon = 1 LSB).  Quantities and what their format must hold:
-//   * W entries (mm/N): the compliance of a scope contact station is ~0.01-10 mm/N, so W needs
-//     fractional resolution (e.g. Q8.24 or Q16.16 with care); off-diagonal terms are smaller.
-//   * delta, d (mm): |d| up to a few tens of mm (tube diameter 25 mm) — Q16.16 is ample.
-//   * f (N): 0..~50 N.
-//   * products W_ab f_b and the sum over b need a 64-bit accumulator (dot products, DESIGN.md) —
-//     here the sum over up to MaxContacts blocks is done in Scalar, so guard bits for
-//     log2(3 MaxContacts) extra terms are needed or the accumulation must move into the scalar's
-//     own wide dot product.
-//   * The slip solve forms kappa (mm/N) up to kappa_hi = (1 + mu ||b||_1) ||e||_1 / (mu c):
-//     unbounded as mu -> 0 or c -> 0.  A fixed-point instantiation must treat mu below a threshold
-//     as frictionless and clamp kappa_hi to the format's range (phi(kappa) is still < 0 there when
-//     ||e|| / kappa_max < mu c; otherwise the clamp is the answer to within the format).
-//   * ||x|| = sqrt(x_t^2 + x_s^2) squares forces (N^2) and displacements: the squares need range
-//     (50 N -> 2500) or a pre-scaled hypot.
-//   * det S and (S + kappa I)^-1 square compliances: det of ~1e-2 mm/N terms is ~1e-4 and must
-//     not underflow; scale W per contact (divide the local problem by W_nn) if needed.
-//   * Divisions: by W_nn (> 0 checked), by det(S + kappa I) (> det S > 0), by mu c (> 0 in the
-//     slip branch), by ||f_T|| (guarded).  Every division's divisor is checked > 0 before use.
+// For float and double the traits hooks below reduce to the plain expressions (the accumulator is
+// the scalar, the local scale is 1, kappa_max is +infinity), so everything in this section is
+// about Q16_16 (fixed_point/q_format.hpp: Q16.16 in int32, saturating +, -, *, /, correctly
+// rounded /, sqrt and hypot, an exact 64-bit product accumulator).  Ranges of the physical
+// inputs: firmware/fixed_point/RANGES.md.
+//   Input format.  W (mm/N), delta_free (mm), f (N), mu, tolerance (N), omega: all Q16.16, LSB
+//   1.5e-5 of each unit.  Every input value is accepted; the intermediates stay in range when
+//   W entries are below 2^14 = 16384 mm/N (S + kappa I < 2^15; the handle-clamped scope reaches
+//   ~2000) and |d| (1 + sqrt(cond W_aa)) < 2^15 mm (e = d_T - d_n A_Tn / A_nn), e.g. |d| < 500 mm
+//   for condition numbers up to 4000.
+//   Coupling sum.  d_a = delta_free_a + sum_{b != a} W_ab f_b goes through the traits'
+//   accumulator: every product W_ab,ij f_b,j is exact (Q32.32, 64 bits) and so is the sum (the
+//   ProductAccumulator is exact for 2^16 terms, 3 MaxContacts + 1 here); one rounding to Q16.16
+//   per component, saturated only if |d| itself exceeds 32768 mm.  The residuals use the same sum.
+//   Local scaling.  Each local solve multiplies W_aa and d_a by 2^k (traits' local_scale: k in
+//   [0, 14], the largest with max diag(W_aa) 2^k < 128 and max |d_a| 2^k < 256): exact shifts,
+//   the same solution f (delta = W f + d <=> 2^k delta = 2^k W f + 2^k d, and Signorini/Coulomb
+//   only see signs and directions of delta).  It gives stiff contacts guard bits: the Schur
+//   complement's smaller eigenvalue, which sets the relative precision of f, grows by 2^k (W_aa
+//   = 0.05 mm/N, |d| = 10 mm: k = 4, 3277 -> 52429 LSB).  The |d| cap keeps e = d_T -
+//   d_n A_Tn / A_nn in range.  Blocks above 128 mm/N are not scaled down (that would drop bits
+//   of the small axial compliances next to the big lateral ones).  Dividing by W_nn instead (force
+//   units) was rejected: for a lateral normal at the scope's tip (W_nn ~ 2000 mm/N next to an
+//   axial 0.47 mm/N) it leaves the axial compliance 31 LSB.
+//   Fused operations instead of squares.  No product of two compliances, two forces, a force
+//   and a force-rate, or a compliance and a derivative is rounded to Q16.16 on its own:
+//     S_ij = (A_ij A_nn - A_in A_nj) / A_nn,  e_i = (d_i A_nn - d_n A_in) / A_nn,
+//     b·f_T = (A_nt f_t + A_ns f_s) / A_nn,  f_T = -adj(S + kappa I) e / p / (det / p),
+//     the degeneracy test det S / p > eps trace S (trace S / p),  p = max(S_tt, S_ss) + kappa,
+//   each numerator exact in the 64-bit accumulator and divided once (traits' quotient); p keeps
+//   |S_ij| / p <= 1, so the Cramer numerators are displacements and det / p is at most the
+//   smaller diagonal entry (det S of 2000 mm/N terms would be 4e6; of 0.01 mm/N terms 1e-4 = 7
+//   LSB).  The Newton step phi / phi' is formed as phi det_p / (phi' det_p), because phi' itself
+//   (N^2/mm) is a few LSB where kappa is hundreds of mm/N.  Norms |f_T|, |e|, |f_T - y| use
+//   hypot (exact squares in 64 bits, correctly rounded root): forces above 181 N and
+//   displacements above 181 mm have squares beyond Q16.16, their hypot does not.  The cone
+//   projection scales each component as f limit / |f_T| (one rounding); the previous-force
+//   guess divides by |f_T| twice instead of by |f_T|^2.
+//   kappa.  kappa_hi = (1 + mu |b|_1) |e|_1 / (mu c) (one rounding) is unbounded as mu c -> 0
+//   (and the local scale multiplies kappa by 2^k too); it is clamped to kappa_max = 16383 (scaled
+//   units), so lo + hi never saturates and S + kappa I stays in range.  When the clamp engages,
+//   phi(kappa_max) is evaluated once more: if it is still > 0 the root lies beyond the format
+//   (a grazing contact: tiny f_n, millimetres of slip), where S + kappa I = kappa I to within
+//   max(S) / kappa_max, so f_T takes the direction u of f_T(kappa_max) and the magnitude from the
+//   cone itself, r = mu c / (1 + mu b·u) — not f_T(kappa_max), whose b·f_T would inflate f_n.
+//   The direction is then off by at most max(S) / kappa_max (< 1% for scaled blocks, < 13% for
+//   a 2000 mm/N block) of r.  Floating point never takes this branch (kappa_max = +infinity).
+//   mu c below half an LSB (7.6e-6 N) rounds to zero and the contact is solved as frictionless
+//   (the same branch as mu = 0).  The early stop of until_converged mode uses an absolute 4 LSB
+//   on phi (traits' slip_tolerance), not 64 eps relative.
+//   Divisions.  By W_nn (checked > 0), by p and det / p (checked > 0), by mu c (checked > 0), by
+//   |f_T| and |f_T(prev)| (checked > 0), by phi' det_p (checked < 0), by w_t in the residuals
+//   (checked > 0); any other division is of a quantity by a format constant.  A division that
+//   still overflows saturates (q_format: toward the quotient's sign, x / 0 toward the sign of
+//   x): never UB, never a trap.
+//   Saturation.  Where an input is garbage (entries at min()/max(), W not positive definite) the
+//   result is defined and projected (f_n >= 0, |f_T| <= mu f_n + 1 LSB), not accurate; detecting
+//   that is the caller's job (the residuals, the kinetics fault flags).
+//   Accuracy (tests/firmware/contact/test_gauss_seidel_contact_q16_16.cpp): a converged local
+//   solve agrees with double on the same inputs to 0.8 mN for forces below 20 N and to 2e-5
+//   relative above (1.5e5 local solves).  Whole fixed-sweep solves, warm-started or cold, agree
+//   to ~1 mN where the forces are in the physical range (12-station cantilever, 0.47..2057 mm/N,
+//   10 sweeps x 12 local iterations: 1.2 mN worst over 2400 problems; random SPD, 0.05..10
+//   mm/N, 8 sweeps x 3: 3.5 mN for contacts up to 50 N, 3.3e-5 relative for the ~500 N ones).
+//   With 3-4 local iterations the cantilever's slip solves are not converged (in double, 4 vs
+//   60 local iterations differ by up to ~1.2 N) and the fixed-sweep result jumps with the last
+//   root-finder decision: Q16_16 vs double then differs by up to ~1 N in a few percent of the
+//   solves (91% within 0.01 N), and so does double with d and f merely rounded to Q16.16 around
+//   each local solve.  The firmware should run enough local iterations for its stations'
+//   anisotropy (12 for 2000:1).
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+
+#include "fixed_point/q_format.hpp"
 
 namespace scopekin::contact {
 
 // ------------------------------------------------------------------------------------------------
 // Scalar traits: the only non-arithmetic operations the solver applies to Scalar.
 // ------------------------------------------------------------------------------------------------
+// Every specialisation provides:
+//   zero(), one(), epsilon()        constants (epsilon: the relative resolution; 1 LSB for fixed
+//                                   point)
+//   abs(x), sqrt(x)                 |x|, square root (x >= 0)
+//   hypot(x, y)                     sqrt(x^2 + y^2), for fixed point without forming the squares
+//   Accumulator, accumulator(x),    a running sum of products started at x; multiply_accumulate
+//   multiply_accumulate(sum, a, b), adds a*b (exactly, for fixed point: the 64-bit accumulator of
+//   result(sum),                    DESIGN.md), result rounds it once to Scalar, quotient divides
+//   quotient(sum, divisor)          it by a Scalar with one rounding (so (a b + c d) / e never
+//                                   rounds the product a b to Scalar on its own)
+//   local_scale(w_max, d_max)       a positive factor the local 3x3 problem (W_aa, d_a) is
+//                                   multiplied by before the local solve; f is unchanged by it
+//   kappa_max()                     the largest kappa the slip root-finder brackets
+//   slip_tolerance(mu_c)            |phi| (N) at which the root-finder may stop early
+//                                   (until_converged mode only)
+// For floating point the accumulator is the scalar itself (sum = sum + a * b, the expressions the
+// solver had before the hooks existed), local_scale is exactly 1, kappa_max is +infinity and
+// slip_tolerance is 64 eps mu c (as before), so the hooks change nothing there.  The Q16_16
+// choices are explained in "Scaling and overflow".
 template <typename Scalar>
 struct ContactScalarTraits;  // specialise for every Scalar the solver is instantiated with
 
-template <>
-struct ContactScalarTraits<double> {
-    static constexpr double zero() noexcept { return 0.0; }
-    static constexpr double one() noexcept { return 1.0; }
-    static constexpr double epsilon() noexcept { return std::numeric_limits<double>::epsilon(); }
-    static double abs(double x) noexcept { return std::fabs(x); }
-    static double sqrt(double x) noexcept { return std::sqrt(x); }
+namespace detail {
+
+/// ContactScalarTraits of a floating-point type.
+template <typename Float>
+struct FloatingContactScalarTraits {
+    using Accumulator = Float;
+    static constexpr Float zero() noexcept { return Float{0}; }
+    static constexpr Float one() noexcept { return Float{1}; }
+    static constexpr Float epsilon() noexcept { return std::numeric_limits<Float>::epsilon(); }
+    static Float abs(Float x) noexcept { return std::fabs(x); }
+    static Float sqrt(Float x) noexcept { return std::sqrt(x); }
+    static Float hypot(Float x, Float y) noexcept { return std::sqrt(x * x + y * y); }
+    static constexpr Accumulator accumulator(Float initial) noexcept { return initial; }
+    static constexpr void multiply_accumulate(Accumulator& sum, Float a, Float b) noexcept {
+        sum = sum + a * b;
+    }
+    static constexpr Float result(const Accumulator& sum) noexcept { return sum; }
+    static constexpr Float quotient(const Accumulator& sum, Float divisor) noexcept {
+        return sum / divisor;
+    }
+    static constexpr Float local_scale(Float /*w_max*/, Float /*d_max*/) noexcept {
+        return Float{1};
+    }
+    static constexpr Float kappa_max() noexcept { return std::numeric_limits<Float>::infinity(); }
+    /// 64 eps relative to mu c.
+    static constexpr Float slip_tolerance(Float mu_c) noexcept {
+        return Float{8} * Float{8} * epsilon() * mu_c;
+    }
 };
 
+}  // namespace detail
+
 template <>
-struct ContactScalarTraits<float> {
-    static constexpr float zero() noexcept { return 0.0F; }
-    static constexpr float one() noexcept { return 1.0F; }
-    static constexpr float epsilon() noexcept { return std::numeric_limits<float>::epsilon(); }
-    static float abs(float x) noexcept { return std::fabs(x); }
-    static float sqrt(float x) noexcept { return std::sqrt(x); }
+struct ContactScalarTraits<double> : detail::FloatingContactScalarTraits<double> {};
+
+template <>
+struct ContactScalarTraits<float> : detail::FloatingContactScalarTraits<float> {};
+
+/// The firmware's Q16.16 (fixed_point/q_format.hpp): saturating arithmetic, 64-bit exact
+/// accumulation, correctly rounded division, square root and hypot.
+template <>
+struct ContactScalarTraits<fixed_point::Q16_16> {
+    using Scalar = fixed_point::Q16_16;
+    using Accumulator = fixed_point::ProductAccumulator;
+
+    /// Local scaling targets (see "Scaling and overflow"): the largest diagonal compliance of
+    /// the scaled block stays below 2^7 = 128 and the largest |d| below 2^8 = 256 (scaled
+    /// units), with at most 2^14 of magnification; blocks already above are not scaled down.
+    static constexpr int local_compliance_bits = 7;
+    static constexpr int local_displacement_bits = 8;
+    static constexpr int local_max_shift = 14;
+
+    static constexpr Scalar zero() noexcept { return Scalar{}; }
+    static constexpr Scalar one() noexcept { return Scalar::from_int(1); }
+    static constexpr Scalar epsilon() noexcept { return Scalar::from_raw(1); }
+    static constexpr Scalar abs(Scalar x) noexcept { return fixed_point::abs_sat(x); }
+    static constexpr Scalar sqrt(Scalar x) noexcept { return fixed_point::sqrt_sat(x); }
+    static constexpr Scalar hypot(Scalar x, Scalar y) noexcept {
+        return fixed_point::hypot_sat(x, y);
+    }
+    static constexpr Accumulator accumulator(Scalar initial) noexcept {
+        return Accumulator{initial};
+    }
+    static constexpr void multiply_accumulate(Accumulator& sum, Scalar a, Scalar b) noexcept {
+        sum.add_product(a, b);
+    }
+    static constexpr Scalar result(const Accumulator& sum) noexcept { return sum.result(); }
+    static constexpr Scalar quotient(const Accumulator& sum, Scalar divisor) noexcept {
+        return sum.quotient(divisor);
+    }
+    /// 2^k, k in [0, local_max_shift] the largest with w_max 2^k < 2^local_compliance_bits and
+    /// d_max 2^k < 2^local_displacement_bits (k = 0 when either is already above).  Multiplying
+    /// by 2^k is exact in Q16.16 (a shift, no rounding, no saturation by the choice of k).
+    static constexpr Scalar local_scale(Scalar w_max, Scalar d_max) noexcept {
+        const int w_bits = bit_width(w_max);
+        const int d_bits = bit_width(d_max);
+        int shift = local_max_shift;
+        const int w_room = Scalar::fraction_bits + local_compliance_bits - w_bits;
+        const int d_room = Scalar::fraction_bits + local_displacement_bits - d_bits;
+        shift = w_room < shift ? w_room : shift;
+        shift = d_room < shift ? d_room : shift;
+        shift = shift < 0 ? 0 : shift;
+        return Scalar::from_raw(Scalar::Raw{1} << (Scalar::fraction_bits + shift));
+    }
+    /// 2^14 - 1 mm/N (in the scaled local problem): lo + hi <= 2 kappa_max never saturates, and
+    /// S + kappa I stays below 2^15 for diagonal entries below 2^14.
+    static constexpr Scalar kappa_max() noexcept { return Scalar::from_int(16383); }
+    /// 4 LSB (6.1e-5 N), absolute: phi = |f_T| - mu f_n is known to a few LSB whatever mu c is
+    /// (a relative 64 eps would be 1e-3 of mu c here).
+    static constexpr Scalar slip_tolerance(Scalar /*mu_c*/) noexcept { return Scalar::from_raw(4); }
+
+private:
+    /// Bits of a non-negative raw value (0 for x <= 0).
+    static constexpr int bit_width(Scalar x) noexcept {
+        return x.raw() <= 0
+                   ? 0
+                   : static_cast<int>(std::bit_width(static_cast<std::uint32_t>(x.raw())));
+    }
 };
 
 // ------------------------------------------------------------------------------------------------
@@ -261,6 +417,64 @@ struct LocalContactSolution {
 // ------------------------------------------------------------------------------------------------
 namespace detail {
 
+template <typename Scalar>
+Scalar max_of(Scalar a, Scalar b) noexcept {
+    return a < b ? b : a;
+}
+
+template <typename Scalar>
+Scalar norm2(Scalar x, Scalar y) noexcept {
+    return ContactScalarTraits<Scalar>::hypot(x, y);
+}
+
+/// (a b + c d) / e with one rounding (the products are never rounded to Scalar on their own).
+template <typename Scalar>
+Scalar mul_add_div(Scalar a, Scalar b, Scalar c, Scalar d, Scalar e) noexcept {
+    using T = ContactScalarTraits<Scalar>;
+    typename T::Accumulator sum = T::accumulator(T::zero());
+    T::multiply_accumulate(sum, a, b);
+    T::multiply_accumulate(sum, c, d);
+    return T::quotient(sum, e);
+}
+
+/// (a b - c d) / e with one rounding.
+template <typename Scalar>
+Scalar mul_sub_div(Scalar a, Scalar b, Scalar c, Scalar d, Scalar e) noexcept {
+    return mul_add_div(a, b, -c, d, e);
+}
+
+/// a b / c with one rounding.
+template <typename Scalar>
+Scalar mul_div(Scalar a, Scalar b, Scalar c) noexcept {
+    using T = ContactScalarTraits<Scalar>;
+    typename T::Accumulator sum = T::accumulator(T::zero());
+    T::multiply_accumulate(sum, a, b);
+    return T::quotient(sum, c);
+}
+
+/// a b + c d + e with one rounding.
+template <typename Scalar>
+Scalar mul_add_add(Scalar a, Scalar b, Scalar c, Scalar d, Scalar e) noexcept {
+    using T = ContactScalarTraits<Scalar>;
+    typename T::Accumulator sum = T::accumulator(T::zero());
+    T::multiply_accumulate(sum, a, b);
+    T::multiply_accumulate(sum, c, d);
+    T::multiply_accumulate(sum, e, T::one());
+    return T::result(sum);
+}
+
+/// f_T scaled onto ||f_T|| = limit (each component f limit / ||f_T||, one rounding), if it is
+/// outside that disc.
+template <typename Scalar>
+void project_onto_disc(Scalar& f_t, Scalar& f_s, Scalar limit) noexcept {
+    using T = ContactScalarTraits<Scalar>;
+    const Scalar norm = norm2(f_t, f_s);
+    if (norm > limit && norm > T::zero()) {
+        f_t = mul_div(f_t, limit, norm);
+        f_s = mul_div(f_s, limit, norm);
+    }
+}
+
 /// f_old + omega (f_new - f_old), projected onto f_n >= 0 and ||f_T|| <= mu f_n.
 template <typename Scalar>
 ContactVec3<Scalar> relax_and_project(const ContactVec3<Scalar>& f_old, const ContactVec3<Scalar>& f_new,
@@ -273,46 +487,37 @@ ContactVec3<Scalar> relax_and_project(const ContactVec3<Scalar>& f_old, const Co
     if (f[0] < T::zero()) {
         return ContactVec3<Scalar>{T::zero(), T::zero(), T::zero()};
     }
-    const Scalar tangential = T::sqrt(f[1] * f[1] + f[2] * f[2]);
-    const Scalar limit = mu * f[0];
-    if (tangential > limit) {
-        const Scalar scale = tangential > T::zero() ? limit / tangential : T::zero();
-        f[1] = f[1] * scale;
-        f[2] = f[2] * scale;
-    }
+    project_onto_disc(f[1], f[2], mu * f[0]);
     return f;
 }
 
-
-template <typename Scalar>
-Scalar norm2(Scalar x, Scalar y) noexcept {
-    using T = ContactScalarTraits<Scalar>;
-    return T::sqrt(x * x + y * y);
-}
-
-template <typename Scalar>
-Scalar max_of(Scalar a, Scalar b) noexcept {
-    return a < b ? b : a;
-}
-
-/// f_T(kappa) = -(S + kappa I)^-1 e and d f_T / d kappa = -(S + kappa I)^-1 f_T.
-/// Returns false if det(S + kappa I) <= 0.
+/// f_T(kappa) = -(S + kappa I)^-1 e and its derivative d f_T / d kappa = -(S + kappa I)^-1 f_T,
+/// by Cramer's rule with the numerators and the determinant divided by p = max(S_tt, S_ss) +
+/// kappa (so no squared compliance is ever rounded to Scalar; |S_ij| / p <= 1 for positive
+/// definite S).  The derivative is returned as its numerator df_t_num = d f_T / d kappa * det_p
+/// together with det_p = det(S + kappa I) / p, because d f_T / d kappa itself (N^2/mm) is tiny
+/// where kappa is large; callers divide by det_p only where it is well scaled.
+/// Returns false if p <= 0 or det_p <= 0.
 template <typename Scalar>
 bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2>& e,
                       Scalar kappa, std::array<Scalar, 2>& f_t,
-                      std::array<Scalar, 2>& df_t) noexcept {
+                      std::array<Scalar, 2>& df_t_num, Scalar& det_p) noexcept {
     using T = ContactScalarTraits<Scalar>;
     const Scalar m00 = s[0] + kappa;
     const Scalar m11 = s[3] + kappa;
-    const Scalar det = m00 * m11 - s[1] * s[2];
-    if (!(det > T::zero())) {
+    const Scalar pivot = max_of(m00, m11);
+    if (!(pivot > T::zero())) {
+        return false;
+    }
+    det_p = mul_sub_div(m00, m11, s[1], s[2], pivot);  // det(S + kappa I) / p
+    if (!(det_p > T::zero())) {
         return false;
     }
     // inverse = [m11 -s01; -s10 m00] / det
-    f_t[0] = -(m11 * e[0] - s[1] * e[1]) / det;
-    f_t[1] = -(m00 * e[1] - s[2] * e[0]) / det;
-    df_t[0] = -(m11 * f_t[0] - s[1] * f_t[1]) / det;
-    df_t[1] = -(m00 * f_t[1] - s[2] * f_t[0]) / det;
+    f_t[0] = -mul_sub_div(m11, e[0], s[1], e[1], pivot) / det_p;
+    f_t[1] = -mul_sub_div(m00, e[1], s[2], e[0], pivot) / det_p;
+    df_t_num[0] = -mul_sub_div(m11, f_t[0], s[1], f_t[1], pivot);
+    df_t_num[1] = -mul_sub_div(m00, f_t[1], s[2], f_t[0], pivot);
     return true;
 }
 
@@ -323,8 +528,8 @@ bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2
 /// `local_iterations` steps (fixed work).  `previous` (optional): this contact's force from the
 /// last sweep, used only to start the slip root-finder (any start inside the bracket converges).
 template <typename Scalar>
-LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
-                                                 const ContactVec3<Scalar>& d, Scalar mu,
+LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_aa,
+                                                 const ContactVec3<Scalar>& d_a, Scalar mu,
                                                  std::size_t local_iterations,
                                                  bool full_iterations,
                                                  const ContactVec3<Scalar>* previous = nullptr) noexcept {
@@ -336,35 +541,62 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
     out.force = {zero, zero, zero};
 
     // (1) Separation.
-    if (d[0] >= zero) {
+    if (d_a[0] >= zero) {
         out.state = ContactState::separated;
         return out;
     }
-    const Scalar a_nn = a[0];
-    if (!(a_nn > zero)) {
+    if (!(w_aa[0] > zero)) {
         out.state = ContactState::degenerate;
         return out;
     }
-    // Eliminate delta_n = 0:  f_n = c - b·f_T,  delta_T = S f_T + e.
+    // The local problem A = scale W_aa, d = scale d_a (scale > 0; exactly 1 for floating point):
+    // delta = A f + d has the same solution f (see "Scaling and overflow").
+    const Scalar w_max = detail::max_of(w_aa[0], detail::max_of(w_aa[4], w_aa[8]));
+    const Scalar d_max =
+        detail::max_of(T::abs(d_a[0]), detail::max_of(T::abs(d_a[1]), T::abs(d_a[2])));
+    const Scalar scale = T::local_scale(w_max, d_max);
+    ContactBlock3<Scalar> a{};
+    for (std::size_t i = 0; i < 9U; ++i) {
+        a[i] = w_aa[i] * scale;
+    }
+    const ContactVec3<Scalar> d{d_a[0] * scale, d_a[1] * scale, d_a[2] * scale};
+
+    // Eliminate delta_n = 0:  f_n = c - b·f_T,  delta_T = S f_T + e, every entry of S and e with
+    // one rounding: S_ij = (A_ij A_nn - A_in A_nj) / A_nn, e_i = (d_i A_nn - d_n A_in) / A_nn.
+    const Scalar a_nn = a[0];
     const Scalar c = -d[0] / a_nn;
     const std::array<Scalar, 2> b{a[1] / a_nn, a[2] / a_nn};
-    const std::array<Scalar, 4> s{a[4] - a[3] * b[0], a[5] - a[3] * b[1],  //
-                                  a[7] - a[6] * b[0], a[8] - a[6] * b[1]};
-    const std::array<Scalar, 2> e{d[1] + c * a[3], d[2] + c * a[6]};
-    const Scalar det_s = s[0] * s[3] - s[1] * s[2];
-    // Relative test: det S > eps * (trace S)^2 (and trace S > 0).
+    const std::array<Scalar, 4> s{detail::mul_sub_div(a[4], a_nn, a[3], a[1], a_nn),
+                                  detail::mul_sub_div(a[5], a_nn, a[3], a[2], a_nn),
+                                  detail::mul_sub_div(a[7], a_nn, a[6], a[1], a_nn),
+                                  detail::mul_sub_div(a[8], a_nn, a[6], a[2], a_nn)};
+    const std::array<Scalar, 2> e{detail::mul_sub_div(d[1], a_nn, d[0], a[3], a_nn),
+                                  detail::mul_sub_div(d[2], a_nn, d[0], a[6], a_nn)};
+    // f_n = c - b·f_T = c - (A_nt f_t + A_ns f_s) / A_nn.
+    const auto normal_force = [&](const std::array<Scalar, 2>& f) noexcept {
+        return c - detail::mul_add_div(a[1], f[0], a[2], f[1], a_nn);
+    };
+    // Relative test: det S > eps * (trace S)^2 (and trace S > 0), written with det S / p,
+    // p = max(S_tt, S_ss) > 0, so that det S itself is never rounded to Scalar.
     const Scalar trace_s = s[0] + s[3];
-    if (!(trace_s > zero) || !(det_s > T::epsilon() * trace_s * trace_s)) {
+    if (!(trace_s > zero)) {
+        out.state = ContactState::degenerate;
+        return out;
+    }
+    const Scalar pivot_s = detail::max_of(s[0], s[3]);
+    const Scalar det_s_over_pivot = detail::mul_sub_div(s[0], s[3], s[1], s[2], pivot_s);
+    if (!(det_s_over_pivot > T::epsilon() * trace_s * (trace_s / pivot_s))) {
         out.state = ContactState::degenerate;
         return out;
     }
 
     // (2) Stick: kappa = 0.
     std::array<Scalar, 2> f_t{zero, zero};
-    std::array<Scalar, 2> df_t{zero, zero};
-    detail::tangential_force(s, e, zero, f_t, df_t);
+    std::array<Scalar, 2> df_t_num{zero, zero};
+    Scalar det_p = one;
+    detail::tangential_force(s, e, zero, f_t, df_t_num, det_p);
     {
-        const Scalar f_n = c - (b[0] * f_t[0] + b[1] * f_t[1]);
+        const Scalar f_n = normal_force(f_t);
         if (f_n >= zero && detail::norm2(f_t[0], f_t[1]) <= mu * f_n) {
             out.force = {f_n, f_t[0], f_t[1]};
             out.state = ContactState::sticking;
@@ -374,26 +606,56 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
 
     // (3) Slip.
     out.state = ContactState::slipping;
-    if (!(mu > zero)) {
-        out.force = {c, zero, zero};  // frictionless: delta_n = 0, f_T = 0
+    const Scalar mu_c = mu * c;
+    if (!(mu_c > zero)) {
+        // Frictionless (mu = 0, or mu c below the format's resolution): delta_n = 0, f_T = 0.
+        out.force = {c, zero, zero};
         return out;
     }
-    const Scalar mu_c = mu * c;
     const Scalar b_1 = T::abs(b[0]) + T::abs(b[1]);
     const Scalar e_1 = T::abs(e[0]) + T::abs(e[1]);
-    Scalar lo = zero;                              // phi(lo) > 0 (stick rejected)
-    Scalar hi = (one + mu * b_1) * e_1 / mu_c;     // phi(hi) < 0 (see header)
+    Scalar lo = zero;                                          // phi(lo) > 0 (stick rejected)
+    Scalar hi = detail::mul_div(one + mu * b_1, e_1, mu_c);  // phi(hi) < 0 (see header)
+    if (hi > T::kappa_max()) {
+        // Fixed point only (kappa_max is +infinity for floating point): the bracket is clamped to
+        // the format.  If phi is still > 0 there, the root lies beyond it, where S + kappa I is
+        // kappa I to within max(S) / kappa_max: take the direction u of f_T(kappa_max) and solve
+        // the cone for the magnitude, |f_T| = r = mu (c - r b·u), i.e. r = mu c / (1 + mu b·u).
+        // (Evaluating f_n from f_T(kappa_max) itself would couple b with a tangential force
+        // far larger than mu f_n.)
+        hi = T::kappa_max();
+        if (detail::tangential_force(s, e, hi, f_t, df_t_num, det_p)) {
+            const Scalar norm_t = detail::norm2(f_t[0], f_t[1]);
+            if (norm_t > zero && norm_t - mu * normal_force(f_t) > zero) {
+                const std::array<Scalar, 2> u{f_t[0] / norm_t, f_t[1] / norm_t};
+                const Scalar denominator =
+                    one + mu * detail::mul_add_div(a[1], u[0], a[2], u[1], a_nn);
+                if (denominator > zero) {
+                    const Scalar r = mu_c / denominator;
+                    f_t = {r * u[0], r * u[1]};
+                    Scalar f_n = normal_force(f_t);
+                    if (f_n < zero) {
+                        f_n = zero;
+                    }
+                    detail::project_onto_disc(f_t[0], f_t[1], mu * f_n);
+                    out.force = {f_n, f_t[0], f_t[1]};
+                    return out;
+                }
+            }
+        }
+    }
     Scalar kappa = detail::norm2(e[0], e[1]) / mu_c - trace_s / two;  // isotropic closed form
     if (previous != nullptr) {
         // Gauss-Seidel revisits the contact with a slightly different d: the kappa of the last
-        // slip force, kappa = -(S f_T + e).f_T / |f_T|^2, is then a much closer start.
+        // slip force, kappa = -(S f_T + e).f_T / |f_T|^2, is then a much closer start.  The
+        // division by |f_T|^2 is done as two divisions by |f_T| (no squared force).
         const Scalar pt = (*previous)[1];
         const Scalar ps = (*previous)[2];
-        const Scalar p2 = pt * pt + ps * ps;
-        if (p2 > zero) {
-            const Scalar dt = s[0] * pt + s[1] * ps + e[0];
-            const Scalar ds = s[2] * pt + s[3] * ps + e[1];
-            const Scalar guess = -(dt * pt + ds * ps) / p2;
+        const Scalar p_norm = detail::norm2(pt, ps);
+        if (p_norm > zero) {
+            const Scalar dt = detail::mul_add_add(s[0], pt, s[1], ps, e[0]);
+            const Scalar ds = detail::mul_add_add(s[2], pt, s[3], ps, e[1]);
+            const Scalar guess = -detail::mul_add_div(dt, pt, ds, ps, p_norm) / p_norm;
             if (guess > lo && guess < hi) {
                 kappa = guess;
             }
@@ -402,15 +664,14 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
     if (!(kappa > lo && kappa < hi)) {
         kappa = (lo + hi) / two;
     }
-    const Scalar eight = two * two * two;
-    const Scalar phi_tolerance = eight * eight * T::epsilon() * mu_c;  // 64 eps relative
+    const Scalar phi_tolerance = T::slip_tolerance(mu_c);
     for (std::size_t it = 0; it < local_iterations; ++it) {
         out.iterations = it + 1U;
-        if (!detail::tangential_force(s, e, kappa, f_t, df_t)) {
+        if (!detail::tangential_force(s, e, kappa, f_t, df_t_num, det_p)) {
             break;  // unreachable for kappa >= 0 and det S > 0; keeps the last f_t
         }
         const Scalar norm_t = detail::norm2(f_t[0], f_t[1]);
-        const Scalar phi = norm_t - mu * (c - (b[0] * f_t[0] + b[1] * f_t[1]));
+        const Scalar phi = norm_t - mu * normal_force(f_t);
         if (phi > zero) {
             lo = kappa;
         } else {
@@ -421,11 +682,14 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
         }
         Scalar next = (lo + hi) / two;
         if (norm_t > zero) {
-            const Scalar dphi =
-                (f_t[0] * df_t[0] + f_t[1] * df_t[1]) / norm_t +
-                mu * (b[0] * df_t[0] + b[1] * df_t[1]);
-            if (dphi < zero) {
-                const Scalar newton = kappa - phi / dphi;
+            // dphi/dkappa = (f_T·f_T' / |f_T| + mu b·f_T'), f_T' = df_t_num / det_p: the bracket
+            // below is dphi * det_p (in N, well scaled), and the Newton step phi / dphi is
+            // formed as phi det_p / (dphi det_p) with one rounding.
+            const Scalar dphi_det =
+                detail::mul_add_div(f_t[0], df_t_num[0], f_t[1], df_t_num[1], norm_t) +
+                mu * detail::mul_add_div(a[1], df_t_num[0], a[2], df_t_num[1], a_nn);
+            if (dphi_det < zero) {
+                const Scalar newton = kappa - detail::mul_div(phi, det_p, dphi_det);
                 if (newton >= lo && newton <= hi) {
                     next = newton;
                 }
@@ -433,18 +697,12 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& a,
         }
         kappa = next;
     }
-    detail::tangential_force(s, e, kappa, f_t, df_t);
-    Scalar f_n = c - (b[0] * f_t[0] + b[1] * f_t[1]);
+    detail::tangential_force(s, e, kappa, f_t, df_t_num, det_p);
+    Scalar f_n = normal_force(f_t);
     if (f_n < zero) {
         f_n = zero;
     }
-    const Scalar norm_t = detail::norm2(f_t[0], f_t[1]);
-    const Scalar limit = mu * f_n;
-    if (norm_t > limit && norm_t > zero) {
-        const Scalar scale = limit / norm_t;
-        f_t[0] = f_t[0] * scale;
-        f_t[1] = f_t[1] * scale;
-    }
+    detail::project_onto_disc(f_t[0], f_t[1], mu * f_n);
     out.force = {f_n, f_t[0], f_t[1]};
     return out;
 }
@@ -462,14 +720,18 @@ ContactResiduals<Scalar> evaluate_contact_residuals(
     const std::size_t n = p.contact_count < MaxContacts ? p.contact_count : MaxContacts;
     ContactResiduals<Scalar> r{zero, zero, zero};
     for (std::size_t a = 0; a < n; ++a) {  // bound: MaxContacts
-        ContactVec3<Scalar> delta = p.free_displacement[a];
+        std::array<typename T::Accumulator, 3> sum{T::accumulator(p.free_displacement[a][0]),
+                                                   T::accumulator(p.free_displacement[a][1]),
+                                                   T::accumulator(p.free_displacement[a][2])};
         for (std::size_t b = 0; b < n; ++b) {  // bound: MaxContacts
             const ContactBlock3<Scalar>& w = p.block(a, b);
             for (std::size_t i = 0; i < 3U; ++i) {
-                delta[i] = delta[i] + w[i * 3U] * f[b][0] + w[i * 3U + 1U] * f[b][1] +
-                           w[i * 3U + 2U] * f[b][2];
+                T::multiply_accumulate(sum[i], w[i * 3U], f[b][0]);
+                T::multiply_accumulate(sum[i], w[i * 3U + 1U], f[b][1]);
+                T::multiply_accumulate(sum[i], w[i * 3U + 2U], f[b][2]);
             }
         }
+        const ContactVec3<Scalar> delta{T::result(sum[0]), T::result(sum[1]), T::result(sum[2])};
         const ContactBlock3<Scalar>& w_aa = p.block(a, a);
         const Scalar f_n = f[a][0];
         // Signorini natural map in N.
@@ -534,7 +796,11 @@ ContactSolveReport<Scalar, MaxContacts> solve_contacts(
         Scalar change = zero;
         std::size_t degenerate = 0;
         for (std::size_t a = 0; a < n; ++a) {  // bound: MaxContacts
-            ContactVec3<Scalar> d = p.free_displacement[a];
+            // d_a = delta_free_a + sum_{b != a} W_ab f_b in the traits' accumulator (for Q16_16
+            // exact in 64 bits, one rounding per component).
+            std::array<typename T::Accumulator, 3> sum{T::accumulator(p.free_displacement[a][0]),
+                                                       T::accumulator(p.free_displacement[a][1]),
+                                                       T::accumulator(p.free_displacement[a][2])};
             for (std::size_t b = 0; b < n; ++b) {  // bound: MaxContacts
                 if (b == a) {
                     continue;
@@ -544,10 +810,13 @@ ContactSolveReport<Scalar, MaxContacts> solve_contacts(
                     continue;  // a separated contact adds nothing (exactly)
                 }
                 const ContactBlock3<Scalar>& w = p.block(a, b);
-                d[0] = d[0] + w[0] * fb[0] + w[1] * fb[1] + w[2] * fb[2];
-                d[1] = d[1] + w[3] * fb[0] + w[4] * fb[1] + w[5] * fb[2];
-                d[2] = d[2] + w[6] * fb[0] + w[7] * fb[1] + w[8] * fb[2];
+                for (std::size_t i = 0; i < 3U; ++i) {
+                    T::multiply_accumulate(sum[i], w[i * 3U], fb[0]);
+                    T::multiply_accumulate(sum[i], w[i * 3U + 1U], fb[1]);
+                    T::multiply_accumulate(sum[i], w[i * 3U + 2U], fb[2]);
+                }
             }
+            const ContactVec3<Scalar> d{T::result(sum[0]), T::result(sum[1]), T::result(sum[2])};
             LocalContactSolution<Scalar> local = solve_local_contact(
                 p.block(a, a), d, p.friction[a], settings.local_iterations, fixed, &forces[a]);
             if (relaxed) {

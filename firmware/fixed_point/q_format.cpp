@@ -1,40 +1,33 @@
+// Q16.16 fixed point: everything is constexpr in q_format.hpp.  This translation unit pins, on
+// every target's compiler, the bounds that the header's "Scaling and overflow behaviour" relies
+// on (the hand-computed value tests are in tests/firmware/test_q_format.cpp).
 #include "fixed_point/q_format.hpp"
 
-#include <Eigen/Core>
+#include <cstdint>
+#include <limits>
 
 namespace scopekin::fixed_point {
 
 namespace {
 
-using RawVec3 = Eigen::Matrix<std::int32_t, 3, 1>;
-using WideVec3 = Eigen::Matrix<std::int64_t, 3, 1>;
+constexpr std::int64_t int32_span = std::int64_t{1} << 31;
 
-RawVec3 raw_vector(const Q16_16Vec3& v) noexcept {
-    return RawVec3{v[0].raw(), v[1].raw(), v[2].raw()};
-}
+// Largest Q32.32 product magnitude: (-2^31)^2 = 2^62; its high word (>> 16) is 2^46, so 2^16
+// terms stay below 2^62 + 2^16 and never reach the 2^63 - 1 saturation of the high word.
+static_assert(int32_span * int32_span == std::int64_t{1} << 62);
+static_assert((std::int64_t{1} << 46) * static_cast<std::int64_t>(ProductAccumulator::exact_terms) +
+                  static_cast<std::int64_t>(ProductAccumulator::exact_terms) <
+              std::numeric_limits<std::int64_t>::max());
 
-/// a + b saturated symmetrically to ±(2^63 - 1), so the result can always be negated.
-std::int64_t add_sat_symmetric(std::int64_t a, std::int64_t b) noexcept {
-    constexpr std::int64_t limit = std::numeric_limits<std::int64_t>::max();
-    std::int64_t sum = 0;
-    if (__builtin_add_overflow(a, b, &sum)) {
-        return a > 0 ? limit : -limit;
-    }
-    return sum < -limit ? -limit : sum;
-}
+// The root of the largest Q32.32 value fits the 32-step bit-by-bit method's 2^32 result range,
+// and the widened sqrt_sat argument (raw * 2^16 < 2^47) gives a root below 2^24.
+static_assert(detail::isqrt_round(std::numeric_limits<std::uint64_t>::max()) ==
+              std::uint64_t{1} << 32);
+static_assert(detail::isqrt_round(std::uint64_t{1} << 62) == std::uint64_t{1} << 31);
+
+// The widened dividend of div_sat: |a| * 2^16 <= 2^47, far inside int64.
+static_assert(int32_span * Q16_16::one_raw == std::int64_t{1} << 47);
 
 }  // namespace
-
-Q16_16 dot3_sat(const Q16_16Vec3& a, const Q16_16Vec3& b) noexcept {
-    // Exact Q32.32 products, |p_i| <= 2^62.
-    const WideVec3 products =
-        raw_vector(a).cast<std::int64_t>().cwiseProduct(raw_vector(b).cast<std::int64_t>());
-    std::int64_t accumulator = 0;
-    for (Eigen::Index i = 0; i < products.size(); ++i) {  // bound: 3 (fixed-size vector)
-        accumulator = add_sat_symmetric(accumulator, products[i]);
-    }
-    return Q16_16::from_raw(detail::saturate_to_int32(
-        detail::rounding_shift_right(accumulator, Q16_16::fraction_bits)));
-}
 
 }  // namespace scopekin::fixed_point

@@ -24,6 +24,8 @@
 #include <cstdint>
 #include <type_traits>
 
+#include "decimal_text.hpp"
+
 namespace scopekin::portable_check {
 
 /// Console output of the bare-metal runner (semihosting on Cortex-M4).
@@ -62,14 +64,8 @@ struct Registrar {
 };
 
 inline void write_unsigned(std::uint64_t value) noexcept {
-    char digits[21];
-    std::size_t n = sizeof digits;
-    digits[--n] = '\0';
-    do {
-        digits[--n] = static_cast<char>('0' + static_cast<int>(value % 10U));
-        value /= 10U;
-    } while (value != 0U && n > 0U);
-    write_text(&digits[n]);
+    DecimalBuffer buffer;
+    write_text(decimal_text(value, buffer));
 }
 
 inline void write_signed(std::int64_t value) noexcept {
