@@ -576,6 +576,16 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_
     const auto normal_force = [&](const std::array<Scalar, 2>& f) noexcept {
         return c - detail::mul_add_div(a[1], f[0], a[2], f[1], a_nn);
     };
+    // The slip force of a tangential f_T: f_n from it, clamped >= 0, f_T scaled back onto the
+    // cone if rounding left it outside.
+    const auto slip_force = [&](std::array<Scalar, 2> f) noexcept {
+        Scalar f_n = normal_force(f);
+        if (f_n < zero) {
+            f_n = zero;
+        }
+        detail::project_onto_disc(f[0], f[1], mu * f_n);
+        return ContactVec3<Scalar>{f_n, f[0], f[1]};
+    };
     // Relative test: det S > eps * (trace S)^2 (and trace S > 0), written with det S / p,
     // p = max(S_tt, S_ss) > 0, so that det S itself is never rounded to Scalar.
     const Scalar trace_s = s[0] + s[3];
@@ -633,12 +643,7 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_
                 if (denominator > zero) {
                     const Scalar r = mu_c / denominator;
                     f_t = {r * u[0], r * u[1]};
-                    Scalar f_n = normal_force(f_t);
-                    if (f_n < zero) {
-                        f_n = zero;
-                    }
-                    detail::project_onto_disc(f_t[0], f_t[1], mu * f_n);
-                    out.force = {f_n, f_t[0], f_t[1]};
+                    out.force = slip_force(f_t);
                     return out;
                 }
             }
@@ -698,12 +703,7 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_
         kappa = next;
     }
     detail::tangential_force(s, e, kappa, f_t, df_t_num, det_p);
-    Scalar f_n = normal_force(f_t);
-    if (f_n < zero) {
-        f_n = zero;
-    }
-    detail::project_onto_disc(f_t[0], f_t[1], mu * f_n);
-    out.force = {f_n, f_t[0], f_t[1]};
+    out.force = slip_force(f_t);
     return out;
 }
 
