@@ -328,6 +328,10 @@ struct ContactProblem {
     std::array<ContactVec3<Scalar>, MaxContacts> free_displacement{};
     /// Coulomb friction coefficient mu_a >= 0 per contact.
     std::array<Scalar, MaxContacts> friction{};
+    /// true: W has no coupling between contacts (every block (a, b), a != b, is zero and is
+    /// neither read nor required to be set).  The coupling sums are then skipped — exactly what
+    /// they would add — and one sweep solves the problem (the local problems are independent).
+    bool block_diagonal{false};
 
     ContactBlock3<Scalar>& block(std::size_t a, std::size_t b) noexcept {
         return delassus[a * MaxContacts + b];
@@ -724,6 +728,9 @@ ContactResiduals<Scalar> evaluate_contact_residuals(
                                                    T::accumulator(p.free_displacement[a][1]),
                                                    T::accumulator(p.free_displacement[a][2])};
         for (std::size_t b = 0; b < n; ++b) {  // bound: MaxContacts
+            if (p.block_diagonal && b != a) {
+                continue;
+            }
             const ContactBlock3<Scalar>& w = p.block(a, b);
             for (std::size_t i = 0; i < 3U; ++i) {
                 T::multiply_accumulate(sum[i], w[i * 3U], f[b][0]);
@@ -802,7 +809,7 @@ ContactSolveReport<Scalar, MaxContacts> solve_contacts(
                                                        T::accumulator(p.free_displacement[a][1]),
                                                        T::accumulator(p.free_displacement[a][2])};
             for (std::size_t b = 0; b < n; ++b) {  // bound: MaxContacts
-                if (b == a) {
+                if (b == a || p.block_diagonal) {
                     continue;
                 }
                 const ContactVec3<Scalar>& fb = forces[b];

@@ -1,18 +1,221 @@
-// Placeholder while the reduced model is written (issue 4); replaced by the real estimator.
+// The kinetic estimator's step (kinetics.hpp): input validation, the reduced model, outputs,
+// monitors.  Fixed-point formats: every quantity is Q16.16 in the units of its name (RANGES.md).
+//
+// Scaling and overflow: depths stay in [-50, 2000] mm after validation and the depth step is at
+// most 1000 mm/s * 1 s; the tip path is a table path (< 2000 mm) plus an elastic deviation
+// (|W| < 32 mm/N times forces < 100 N, see RANGES.md); the velocity divides a path difference
+// (< 4000 mm) by 10 periods (>= 10 * 2^-16 s) — saturating division, flagged when it saturates.
 #include "kinetics/kinetics.hpp"
 
 namespace scopekin::kinetics {
 
+namespace {
+
+using monitors::AdvanceEfficiency;
+using monitors::ContactForceMonitor;
+using monitors::SelfLockMonitor;
+
+/// A contact solve residual above this (N) is reported (kFaultContactResidual).
+constexpr Q16_16 kContactResidualBoundN = Q16_16::from_ratio(1, 20);
+/// Normal force below which a distal station does not count as in contact (monitors' 0.05 N).
+constexpr Q16_16 kMinContactForceN = Q16_16::from_ratio(1, 20);
+
+bool limits_valid(const InputLimits& l) noexcept {
+    const Q16_16 zero{};
+    return l.insertion_min_mm < l.insertion_max_mm && l.max_insertion_speed_mm_per_s > zero &&
+           l.force_max_abs_N > zero && l.torque_max_abs_Nmm > zero && l.roll_max_abs_rad > zero;
+}
+
+ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault) noexcept {
+    tables_fault = check_reduced_tables(config.tables, kStationCapacity);
+    if (!(config.period_s > Q16_16{}) || config.period_s > Q16_16::from_int(1)) return ConfigFault::period;
+    if (config.contact_sweeps == 0U || config.contact_sweeps > 64U || config.contact_local_iterations == 0U ||
+        config.contact_local_iterations > 64U) {
+        return ConfigFault::contact_settings;
+    }
+    if (!limits_valid(config.limits)) return ConfigFault::limits;
+    if (tables_fault != ReducedTablesFault::none) return ConfigFault::tables;
+    if (!AdvanceEfficiency<>::valid(config.efficiency) || !SelfLockMonitor::valid(config.self_lock) ||
+        !ContactForceMonitor::valid(config.contact_force)) {
+        return ConfigFault::monitors;
+    }
+    return ConfigFault::none;
+}
+
+Q16_16 clamp(Q16_16 x, Q16_16 low, Q16_16 high) noexcept {
+    if (x < low) return low;
+    if (x > high) return high;
+    return x;
+}
+
+/// A held, range-checked signal: returns the value to use, sets the stale / range bits.
+Q16_16 validate_signal(bool fresh, Q16_16 reading, Q16_16 held, Q16_16 max_abs, std::uint32_t stale_bit,
+                       std::uint32_t range_bit, std::uint32_t& faults) noexcept {
+    if (!fresh) {
+        faults |= stale_bit;
+        return held;
+    }
+    const Q16_16 limited = clamp(reading, fixed_point::neg_sat(max_abs), max_abs);
+    if (!(limited == reading)) faults |= range_bit;
+    return limited;
+}
+
+/// The depth the model uses: range-checked, then moved toward the reading by at most max_step.
+void validate_insertion(const Inputs& inputs, State& state, std::uint32_t& faults) noexcept {
+    const InputLimits& l = state.config.limits;
+    if ((inputs.fresh_mask & kInsertion) == 0U) {
+        faults |= kFaultInsertionStale;
+        return;
+    }
+    const Q16_16 reading = clamp(inputs.insertion_mm, l.insertion_min_mm, l.insertion_max_mm);
+    if (!(reading == inputs.insertion_mm)) faults |= kFaultInsertionRange;
+    if (!state.insertion_seen) {
+        state.insertion_mm = reading;
+        state.insertion_seen = true;
+        return;
+    }
+    const Q16_16 max_step = l.max_insertion_speed_mm_per_s * state.config.period_s;
+    const Q16_16 move = reading - state.insertion_mm;
+    if (move > max_step) {
+        state.insertion_mm = state.insertion_mm + max_step;
+        faults |= kFaultInsertionJump;
+    } else if (move < fixed_point::neg_sat(max_step)) {
+        state.insertion_mm = state.insertion_mm - max_step;
+        faults |= kFaultInsertionJump;
+    } else {
+        state.insertion_mm = reading;
+    }
+}
+
+StationState station_state(contact::ContactState s) noexcept {
+    switch (s) {
+        case contact::ContactState::sticking: return StationState::sticking;
+        case contact::ContactState::slipping: return StationState::slipping;
+        case contact::ContactState::degenerate: return StationState::degenerate;
+        case contact::ContactState::separated: break;
+    }
+    return StationState::separated;
+}
+
+ContactForceLevel output_level(monitors::ContactForceLevel level) noexcept {
+    switch (level) {
+        case monitors::ContactForceLevel::warning: return ContactForceLevel::warning;
+        case monitors::ContactForceLevel::critical: return ContactForceLevel::critical;
+        case monitors::ContactForceLevel::normal: break;
+    }
+    return ContactForceLevel::normal;
+}
+
+/// Tip velocity: mean over the ring (oldest to newest), 0 until it holds two samples.
+Q16_16 tip_velocity(State& state, Q16_16 tip_mm, std::uint32_t& faults) noexcept {
+    const std::size_t oldest = state.tip_history_count < kVelocityWindow ? 0U : state.tip_history_next;
+    const Q16_16 first = state.tip_history_mm[oldest];
+    const std::size_t spans = state.tip_history_count < kVelocityWindow ? state.tip_history_count : kVelocityWindow;
+    state.tip_history_mm[state.tip_history_next] = tip_mm;
+    state.tip_history_next = (state.tip_history_next + 1U) % kVelocityWindow;
+    if (state.tip_history_count < kVelocityWindow) ++state.tip_history_count;
+    if (spans == 0U) return Q16_16{};
+    const Q16_16 elapsed_s = state.config.period_s * Q16_16::from_int(static_cast<int>(spans));
+    const Q16_16 velocity = (tip_mm - first) / elapsed_s;
+    if (velocity == Q16_16::max() || velocity == Q16_16::min()) faults |= kFaultSaturation;
+    return velocity;
+}
+
+}  // namespace
+
 void init(const Config& config, State& state) noexcept {
     state = State{};
     state.config = config;
+    state.config_fault = check_config(config, state.tables_fault);
+    (void)state.efficiency.init(config.efficiency);
+    (void)state.self_lock.init(config.self_lock);
+    (void)state.contact_force.init(config.contact_force);
 }
 
 void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     outputs = Outputs{};
     outputs.step_index = state.steps++;
-    if ((inputs.fresh_mask & kInsertion) != 0U) state.insertion_mm = inputs.insertion_mm;
-    outputs.tip_path_mm = state.insertion_mm;
+    if (state.config_fault != ConfigFault::none) {
+        outputs.fault_flags = kFaultConfig;
+        return;
+    }
+    const Config& config = state.config;
+    std::uint32_t faults = 0;
+
+    // 1. Inputs.
+    validate_insertion(inputs, state, faults);
+    state.handle_force_N = validate_signal((inputs.fresh_mask & kHandleForce) != 0U, inputs.handle_force_N,
+                                           state.handle_force_N, config.limits.force_max_abs_N, kFaultForceStale,
+                                           kFaultForceRange, faults);
+    state.handle_torque_Nmm = validate_signal((inputs.fresh_mask & kHandleTorque) != 0U, inputs.handle_torque_Nmm,
+                                              state.handle_torque_Nmm, config.limits.torque_max_abs_Nmm,
+                                              kFaultTorqueStale, kFaultTorqueRange, faults);
+    state.roll_rad = validate_signal((inputs.fresh_mask & kRoll) != 0U, inputs.roll_rad, state.roll_rad,
+                                     config.limits.roll_max_abs_rad, kFaultRollStale, kFaultRollRange, faults);
+
+    // 2. The reduced model (no estimate before the first insertion sample: the depth is unknown).
+    if (!state.insertion_seen) {
+        outputs.fault_flags = faults;
+        return;
+    }
+    contact::GaussSeidelSettings<Q16_16> gauss_seidel{};
+    gauss_seidel.mode = contact::SweepMode::fixed;
+    gauss_seidel.max_sweeps = config.contact_sweeps;
+    gauss_seidel.local_iterations = config.contact_local_iterations;
+    const ReducedStepReport<Q16_16, kStationCapacity> report =
+        reduced_step(*config.tables, state.insertion_mm, state.model, gauss_seidel);
+    if (report.depth_clamped) faults |= kFaultDepthOutsideModel;
+    const auto& residuals = report.contact.residuals;
+    if (report.contact.status == contact::ContactSolveStatus::invalid_input ||
+        residuals.complementarity > kContactResidualBoundN || residuals.cone_violation > kContactResidualBoundN ||
+        residuals.friction > kContactResidualBoundN) {
+        faults |= kFaultContactResidual;
+    }
+
+    // 3. Outputs.
+    const ReducedState<Q16_16, kStationCapacity>& model = state.model;
+    outputs.tip_path_mm = model.tip_path_mm;
+    outputs.tip_velocity_mm_per_s = tip_velocity(state, model.tip_path_mm, faults);
+    outputs.active_stations = static_cast<std::uint8_t>(model.active_stations);
+    const Q16_16 spacing = config.tables->header().station_spacing_mm;
+    for (std::size_t j = 0; j < kStationCapacity; ++j) {  // bound: kStationCapacity
+        if (j >= model.active_stations) break;
+        StationEstimate& out = outputs.stations[j];
+        const auto& f = model.force_N[j];
+        out.arc_from_tip_mm = spacing * Q16_16::from_int(static_cast<int>(j));
+        out.path_position_mm = model.reference_path_mm[j] + model.elastic_mm[j][1];
+        out.normal_force_N = f[0];
+        out.tangential_force_N = fixed_point::hypot_sat(f[1], f[2]);
+        out.state = station_state(model.contact_state[j]);
+        const Q16_16 magnitude = fixed_point::hypot_sat(out.normal_force_N, out.tangential_force_N);
+        if (magnitude > outputs.max_contact_force_N) {
+            outputs.max_contact_force_N = magnitude;
+            outputs.max_contact_station = static_cast<std::uint8_t>(j);
+            outputs.max_contact_path_mm = out.path_position_mm;
+        }
+        if (j < kDistalStations && out.state == StationState::sticking && !(out.normal_force_N < kMinContactForceN)) {
+            ++outputs.distal_sticking;
+        }
+    }
+    if (outputs.tip_path_mm == Q16_16::max() || outputs.tip_path_mm == Q16_16::min() ||
+        outputs.max_contact_force_N == Q16_16::max()) {
+        faults |= kFaultSaturation;
+    }
+
+    // 4. Monitors.
+    const AdvanceEfficiency<>::Outputs efficiency = state.efficiency.step({model.tip_path_mm, state.insertion_mm});
+    outputs.advance_efficiency = efficiency.efficiency;
+    SelfLockMonitor::Inputs lock_inputs{};
+    lock_inputs.distal_sticking = outputs.distal_sticking;
+    lock_inputs.handle_advancing = efficiency.handle_advancing;
+    lock_inputs.efficiency = efficiency.efficiency;
+    lock_inputs.efficiency_defined = efficiency.defined;
+    const SelfLockMonitor::Outputs lock = state.self_lock.step(lock_inputs);
+    outputs.self_lock_alarm = lock.alarm;
+    const ContactForceMonitor::Outputs force_level = state.contact_force.step(outputs.max_contact_force_N);
+    outputs.contact_force_level = output_level(force_level.level);
+    if (efficiency.input_fault || lock.input_fault || force_level.input_fault) faults |= kFaultMonitorInput;
+    outputs.fault_flags = faults;
 }
 
 }  // namespace scopekin::kinetics

@@ -1,23 +1,103 @@
 // kinetics.hpp — the firmware's kinetic estimator: one call per period.
 //
-//   init(config, state)          once at start-up (the only place anything is set up)
+//   init(config, state)          once at start-up: validates the configuration and the reduced
+//                                model's tables (shape, checksum); the only place anything is set up
 //   step(inputs, state, outputs) every period (default 5 ms = 200 Hz): pure function of its
-//                                arguments, no heap, no static mutable data, fixed work.
+//                                arguments, no heap, no static mutable data, fixed work
+//
+// One step:
+//   1. Input validation (see "Bad input" below): every signal is range-checked, held when stale,
+//      and the insertion depth is rate-limited; each fault sets its Outputs::fault_flags bit.
+//   2. The reduced-order model (reduced_kinetics.hpp) at the validated depth: the Gauss-Seidel
+//      contact solve of the stations in Q16.16, a fixed number of sweeps and local iterations.
+//   3. Outputs: the tip's position along the colon and its velocity (mean over the last
+//      kVelocityWindow steps, so it lags by half that window), each station's forces and stick /
+//      slip state, the largest contact force and where it acts.
+//   4. Monitors (firmware/monitors): advance efficiency, self-lock (distal stick while the handle
+//      advances, confirmed by falling efficiency), contact-force warning / critical.
+//
+// Bad input (Config limits; all Q16.16):
+//   * no fresh sample: the last valid value is held and the signal's "stale" flag is set for as
+//     long as it lasts;
+//   * outside its range: saturated to the range, "range" flag;
+//   * insertion depth moving faster than max_insertion_speed (a hand cannot move the scope 1 m in
+//     5 ms; the encoder can glitch): the depth used moves toward the reading by at most
+//     max_insertion_speed * period per step and the "jump" flag is set until it has caught up —
+//     so a genuine re-zeroing is followed, slowly, and a one-sample spike moves it by one limit.
+//   * tables that fail init's checks: every step returns the fault kFaultModelTables and no
+//     estimate (zeros); nothing is computed from data that is not what the generator wrote.
 #pragma once
 
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include "contact/gauss_seidel_contact.hpp"
 #include "kinetics/kinetics_io.hpp"
+#include "kinetics/reduced_kinetics.hpp"
+#include "kinetics/reduced_tables.hpp"
+#include "monitors/advance_efficiency.hpp"
+#include "monitors/contact_force_monitor.hpp"
+#include "monitors/self_lock_monitor.hpp"
 
 namespace scopekin::kinetics {
 
+/// Steps over which the tip velocity is averaged (50 ms at 5 ms).
+inline constexpr std::size_t kVelocityWindow = 10;
+
+struct InputLimits {
+    Q16_16 insertion_min_mm = Q16_16::from_int(-50);   ///< encoder reads a little below 0 at the anus
+    Q16_16 insertion_max_mm = Q16_16::from_int(2000);  ///< longer than any colonoscope (1.7 m)
+    Q16_16 max_insertion_speed_mm_per_s = Q16_16::from_int(1000);  ///< a fast hand: ~0.5 m/s
+    Q16_16 force_max_abs_N = Q16_16::from_int(100);    ///< 2x the 43 N push of Appleyard 2000
+    Q16_16 torque_max_abs_Nmm = Q16_16::from_int(2000);  ///< 2x the 1 N·m of Appleyard 2000
+    Q16_16 roll_max_abs_rad = Q16_16::from_int(315);   ///< 50 turns, unwrapped
+};
+
 struct Config {
-    Q16_16 period_s = Q16_16::from_ratio(1, 200);  ///< step period (5 ms)
+    Q16_16 period_s = Q16_16::from_ratio(1, 200);  ///< step period (5 ms); (0, 1] s
+    /// The reduced model (kinetics/default_reduced_tables.hpp for the generated default set).
+    const ReducedTablesQ16* tables{nullptr};
+    /// Sweeps of the station contact solve (fixed: same work every step; the stations' W is block
+    /// diagonal, so one sweep solves it exactly) and safeguarded-Newton iterations per local slip
+    /// solve (12: Q16.16 within 0.5 mN of double, see the solver tests).
+    std::uint16_t contact_sweeps = 1;
+    std::uint16_t contact_local_iterations = 6;
+    InputLimits limits{};
+    monitors::AdvanceEfficiency<>::Config efficiency{};
+    monitors::SelfLockMonitor::Config self_lock{};
+    monitors::ContactForceMonitor::Config contact_force{};
+};
+
+/// Why init refused a configuration (State::config_fault; none = accepted).
+enum class ConfigFault : std::uint8_t {
+    none,
+    period,            ///< period_s outside (0, 1] s
+    contact_settings,  ///< sweeps or local iterations 0 or above 64
+    limits,            ///< an input range empty or a limit not positive
+    tables,            ///< the reduced model's tables failed check_reduced_tables
+    monitors,          ///< a monitor refused its Config
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
 struct State {
     Config config{};
+    ConfigFault config_fault{ConfigFault::tables};
+    ReducedTablesFault tables_fault{ReducedTablesFault::missing};
     std::uint32_t steps{0};
-    Q16_16 insertion_mm{};
+    // Last valid inputs (held while a signal is stale).
+    Q16_16 insertion_mm{};  ///< the depth the model uses (rate-limited)
+    Q16_16 handle_force_N{};
+    Q16_16 handle_torque_Nmm{};
+    Q16_16 roll_rad{};
+    bool insertion_seen{false};  ///< the first valid insertion sample sets the depth directly
+    ReducedState<Q16_16, kStationCapacity> model{};
+    std::array<Q16_16, kVelocityWindow> tip_history_mm{};  ///< ring, oldest at tip_history_next
+    std::size_t tip_history_next{0};
+    std::size_t tip_history_count{0};
+    monitors::AdvanceEfficiency<> efficiency{};
+    monitors::SelfLockMonitor self_lock{};
+    monitors::ContactForceMonitor contact_force{};
 };
 
 void init(const Config& config, State& state) noexcept;

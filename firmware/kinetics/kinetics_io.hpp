@@ -54,6 +54,9 @@ enum FaultFlag : std::uint32_t {
     kFaultRollRange = 1U << 8U,
     kFaultContactResidual = 1U << 9U,     ///< the contact solve left a residual above its bound
     kFaultSaturation = 1U << 10U,         ///< an internal quantity hit its fixed-point limit
+    kFaultDepthOutsideModel = 1U << 11U,  ///< depth outside the tables' grid: clamped to it
+    kFaultConfig = 1U << 12U,             ///< init refused the configuration: no estimate
+    kFaultMonitorInput = 1U << 13U,       ///< a monitor rejected its input (held its output)
 };
 
 /// Contact state of a station (mirrors contact::ContactState).

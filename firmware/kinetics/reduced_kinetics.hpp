@@ -16,10 +16,13 @@
 //   * the quasi-static compliance between the stations W_g [mm/N] (3K x 3K, symmetric): the
 //     scope's tangent compliance with the handle held + the colon's compliance + the wall's.
 // Station friction: a station's force is the resultant over a curved stretch of scope whose
-// nodes each slide with |f_T| = mu f_n on their own wall normal, so the resultant's |f_T| / f_n is
-// below mu. Where the training slid a stretch (its path position advanced), the station's
-// coefficient is that ratio — the training state then lies on the station's cone, as a sliding
-// contact must; where the stretch stuck, it is mu.
+// nodes each slide with |f_T| = mu f_n on their own wall normal, so the resultant's |f_T| / f_n
+// is not mu — below it on a straight stretch, above it where the normals spread around a bend.
+// Where the training slid a stretch (its path position advanced), the station's coefficient is
+// that ratio: the training state then lies on the station's cone, as a sliding contact must;
+// where the stretch stuck, it is max(mu, 1.05 x ratio), so the training state lies inside.
+// Station gap: 0 where the stretch carries a wall force (in contact, even if the station's own
+// node stands off the wall), the node's gap otherwise.
 // What is kept: the contact mechanics at the stations (Signorini + Coulomb, the thesis's
 // Delassus form, Eq. 4.19-4.24) linearised about the training state at the current depth, and
 // history (stick, slip, the elastic deviation it causes). What is dropped: inertia and damping
@@ -36,9 +39,16 @@
 // the model follows the training state (u stays near 0) and elsewhere deviates from it only
 // through the contact solve — stations sticking where the training slid, or slipping backwards on
 // withdrawal — and those deviations are elastic and local, u = W (f - f_g).
-// STATUS (issue 4, in progress): measured against the full-order model on a loop-forming test
-// procedure at another speed: tip RMS 9.6 mm, station normal force RMS 2.0 N — not yet the
-// issue's 3 mm / 0.2 N. The firmware's own step does not use this model yet.
+// Because W is block diagonal the station problems are independent: the Gauss-Seidel solve
+// (the one solver, ContactProblem::block_diagonal set) is exact after one sweep.
+// STATUS (issue 4, in progress): the firmware's step runs this model (kinetics.cpp). Measured
+// against the full-order model on the reference scenarios (tests/model/test_reduced_accuracy):
+// straight advance tip RMS 2.1 mm, station force RMS 0.91 N; sigmoid loop 9.6 mm, 1.75 N;
+// withdrawal 9.3 mm, 2.6 N — not yet the issue's 3 mm / 0.2 N. Two causes found so far: the
+// full-order model's stick-slip between 340 and 560 mm depends on speed and on its own time step
+// (tip up to 20-28 mm apart between runs at 17 and 25 mm/s, or 5 and 10 ms steps), which no
+// depth-indexed table can follow; and at the locked tip the station frame (n from the station
+// node's wall) does not match the force, which pushes head-on into the bend (|f_T| / f_n ~ 3).
 //
 // ------------------------------------------------------------------------------------------------
 // One step (period h; units mm, N)
@@ -48,9 +58,12 @@
 // each station at the previous step). The contact problem of the step, per station a
 // (delta = W f + delta_free, solved by the one Gauss-Seidel solver, fixed sweeps, warm start):
 //   normal   : delta_n = gap after the step          = g_a + (W (f - f_ref))_a,n
-//   tangents : delta_T = slip over the step          = (p_a - p_prev,a) e_t + u_a,T - u_prev,a,T
+//   tangents : delta_T = slip over the step          = training slip + u_a,T - u_prev,a,T
 // with u = W (f - f_ref), hence
-//   delta_free,a = ( g_a,  p_a - p_prev,a - u_prev,a,t,  -u_prev,a,s ) - (W f_ref)_a.
+//   delta_free,a = ( g_a,  Delta p_a - u_prev,a,t,  r_a Delta p_a - u_prev,a,s ) - (W f_ref)_a,
+// Delta p_a = p_a - p_prev,a, where r_a = f_ref,s / f_ref,t (clamped to +-1) turns the
+// training's advance into its slip direction: Coulomb slip is opposite the friction force, so
+// the training state solves the step when the inputs repeat the training's.
 // After the solve u = W (f - f_ref); the tip's position along the colon is p_0 + u_0,t.
 // Stations not yet inside the body (s <= arc from the tip) are left out; they enter with
 // u = 0 and the training force as warm start.
@@ -163,7 +176,9 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         depth = last_depth;
         report.depth_clamped = true;
     }
-    const Scalar cells = (depth - head.depth_start_mm) * head.inverse_depth_step;
+    // Divided, not multiplied by the stored 1/step: in Q16.16 the rounded reciprocal (6554 raw for
+    // 1/10 mm) would shift the cell by 6e-5 per cell, 0.04 mm of path at 700 mm.
+    const Scalar cells = (depth - head.depth_start_mm) / head.depth_step_mm;
     std::size_t cell = 0;
     for (std::size_t g = 1; g + 1U < head.grid_points; ++g) {  // bound: grid points
         if (ReducedScalarTraits<Scalar>::from_int(static_cast<int>(g)) <= cells) cell = g;
@@ -196,10 +211,8 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     }
     auto& problem = state.problem;
     problem.contact_count = active;
+    problem.block_diagonal = true;  // the off-diagonal blocks are never read
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations blocks of 9
-        for (std::size_t b = 0; b < active; ++b) {
-            if (b != a) problem.block(a, b) = contact::ContactBlock3<Scalar>{};
-        }
         for (std::size_t i = 0; i < 3U; ++i) {
             for (std::size_t j = 0; j < 3U; ++j) {
                 const std::size_t index = compliance_index(k_stations, a, i, j);
@@ -223,31 +236,40 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         state.contact_state[a] = contact::ContactState::separated;
     }
 
-    // delta_free = (g, p - p_prev - u_prev,t, -u_prev,s) - W f_ref.
-    for (std::size_t a = 0; a < active; ++a) {  // bound: Stations^2 blocks
+    // delta_free = (g, p - p_prev - u_prev,t, -u_prev,s) - W f_ref  (W block diagonal).
+    for (std::size_t a = 0; a < active; ++a) {  // bound: Stations
         contact::ContactVec3<Scalar> w_f{};
-        for (std::size_t b = 0; b < active; ++b) {
-            const auto& block = problem.block(a, b);
-            for (std::size_t i = 0; i < 3U; ++i) {
-                for (std::size_t j = 0; j < 3U; ++j) w_f[i] = w_f[i] + block[3U * i + j] * state.reference_force_N[b][j];
-            }
+        const auto& block = problem.block(a, a);
+        for (std::size_t i = 0; i < 3U; ++i) {
+            for (std::size_t j = 0; j < 3U; ++j) w_f[i] = w_f[i] + block[3U * i + j] * state.reference_force_N[a][j];
+        }
+        // The training's slip over the step: along the path by the advance, and sideways as its
+        // friction force says (Coulomb: slip opposite f_T, so slip_s / slip_t = f_s / f_t),
+        // the ratio clamped to +-1 where f_t is small.
+        const Scalar advance = path[a] - state.reference_path_mm[a];
+        const Scalar ft = state.reference_force_N[a][1];
+        const Scalar fs = state.reference_force_N[a][2];
+        const Scalar one = ReducedScalarTraits<Scalar>::from_int(1);
+        Scalar lateral_ratio = T::zero();
+        if (T::abs(fs) < T::abs(ft)) {
+            lateral_ratio = fs / ft;
+        } else if (!(fs == T::zero())) {
+            lateral_ratio = (fs < T::zero()) == (ft < T::zero()) ? one : T::zero() - one;
         }
         problem.free_displacement[a] = {gap[a] - w_f[0],
-                                        path[a] - state.reference_path_mm[a] - state.elastic_mm[a][1] - w_f[1],
-                                        T::zero() - state.elastic_mm[a][2] - w_f[2]};
+                                        advance - state.elastic_mm[a][1] - w_f[1],
+                                        advance * lateral_ratio - state.elastic_mm[a][2] - w_f[2]};
     }
 
     report.contact = contact::solve_contacts(problem, gauss_seidel, state.force_N);
 
     // u = W (f - f_ref); the tip's position along the colon.
-    for (std::size_t a = 0; a < active; ++a) {  // bound: Stations^2 blocks
+    for (std::size_t a = 0; a < active; ++a) {  // bound: Stations
         contact::ContactVec3<Scalar> u{};
-        for (std::size_t b = 0; b < active; ++b) {
-            const auto& block = problem.block(a, b);
-            for (std::size_t i = 0; i < 3U; ++i) {
-                for (std::size_t j = 0; j < 3U; ++j) {
-                    u[i] = u[i] + block[3U * i + j] * (state.force_N[b][j] - state.reference_force_N[b][j]);
-                }
+        const auto& block = problem.block(a, a);
+        for (std::size_t i = 0; i < 3U; ++i) {
+            for (std::size_t j = 0; j < 3U; ++j) {
+                u[i] = u[i] + block[3U * i + j] * (state.force_N[a][j] - state.reference_force_N[a][j]);
             }
         }
         state.elastic_mm[a] = u;

@@ -53,6 +53,10 @@ namespace {
 /// A stretch "slid" between two grid depths if its path position advanced by more than this
 /// fraction of the depth step (the tip advances ~1 mm per mm while sliding, ~0 when stuck).
 constexpr double kSlidThreshold = 0.2;
+/// A station's force is the resultant over a curved stretch whose nodes' normals spread, so it
+/// can lie outside the mu-cone of the station frame; where the stretch stuck, the station's cone
+/// is widened to hold it with this margin.
+constexpr double kStuckMargin = 1.05;
 
 /// One grid record in the firmware's layout (station 0 = tip first).
 std::vector<double> record_of(World& world, const std::vector<std::size_t>& nodes_increasing,
@@ -67,7 +71,9 @@ std::vector<double> record_of(World& world, const std::vector<std::size_t>& node
     inside[j] = p.inside;
     const std::size_t base = j * kinetics::kStationValueCount;
     record[base + kinetics::kStationPath] = p.path_mm;
-    record[base + kinetics::kStationGap] = std::max(0.0, p.gap_mm);
+    // A station whose stretch carries a wall force is in contact: its gap is 0 even when its own
+    // node (the stretch's centre) stands off the wall.
+    record[base + kinetics::kStationGap] = forces[j](0) > 0.0 ? 0.0 : std::max(0.0, p.gap_mm);
     for (std::size_t c = 0; c < 3; ++c) record[base + kinetics::kStationForceN + c] = forces[j](static_cast<Eigen::Index>(c));
   }
   const Eigen::Vector3d tip = world.node_position_mm(world.scope_node_count() - 1);
@@ -156,7 +162,8 @@ ReducedModelData build_reduced_model(const Scenario& training, const ReductionSe
       const double fn = data.records[g][base + kinetics::kStationForceN];
       const double ft = std::hypot(data.records[g][base + kinetics::kStationForceT], data.records[g][base + kinetics::kStationForceS]);
       const bool slid = advance > kSlidThreshold * settings.depth_step_mm;
-      data.records[g][base + kinetics::kStationFriction] = slid && fn > 0.0 ? std::min(mu, ft / fn) : mu;
+      const double ratio = fn > 0.0 ? ft / fn : 0.0;
+      data.records[g][base + kinetics::kStationFriction] = slid ? ratio : std::max(mu, kStuckMargin * ratio);
     }
   // A station outside the body at a grid depth takes its values from the first grid depth where
   // it is inside: interpolation just after it enters then starts from real data.

@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
     const std::size_t steps =
         max_steps == 0U || max_steps > scenario->step_count ? scenario->step_count : max_steps;
 
-    scopekin::kinetics::init(scopekin::kinetics::Config{}, g_state);
+    scopekin::kinetics::init(scopekin::kinetics::default_config(), g_state);
     std::uint32_t sink = 0;
     for (std::size_t i = 0; i < steps; ++i) {
         const scopekin::kinetics::Inputs inputs = scopekin::budget::to_inputs(scenario->steps[i]);

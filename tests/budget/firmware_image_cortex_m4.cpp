@@ -13,6 +13,7 @@
 #include <cstdint>
 
 #include "decimal_text.hpp"
+#include "kinetics/default_reduced_tables.hpp"
 #include "kinetics/kinetics.hpp"
 #include "semihosting.h"
 
@@ -54,7 +55,7 @@ int main() {
         *word = kPaint;
     }
 
-    const scopekin::kinetics::Config config{};
+    const scopekin::kinetics::Config config = scopekin::kinetics::default_config();
     scopekin::kinetics::init(config, g_state);
     for (std::uint32_t i = 0; i < kSteps; ++i) {
         const std::uint32_t k = i % 4U;

@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
         }
         // --- counted window: nothing below may allocate (no I/O, no strings) ---
         const HeapCounters before_init = g_heap;
-        scopekin::kinetics::init(scopekin::kinetics::Config{}, g_state);
+        scopekin::kinetics::init(scopekin::kinetics::default_config(), g_state);
         const HeapCounters after_init = g_heap;
         for (std::size_t i = 0; i < scenario->step_count; ++i) {
             const scopekin::kinetics::Inputs inputs = scopekin::budget::to_inputs(scenario->steps[i]);

@@ -13,6 +13,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "kinetics/default_reduced_tables.hpp"
 #include "kinetics/kinetics.hpp"
 #include "scenario_format.hpp"
 
@@ -128,12 +129,12 @@ constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noe
 
 // --- one scenario through init + step -----------------------------------------------------------
 
-/// init(Config{}, state), then step() once per scenario step; after each step calls
+/// init(default_config(), state), then step() once per scenario step; after each step calls
 /// `after_step(step_number, outputs)`.  `state` and `outputs` belong to the caller (static).
 template <typename AfterStep>
 void run_scenario(const Scenario& scenario, kinetics::State& state, kinetics::Outputs& outputs,
                   AfterStep&& after_step) noexcept {
-    kinetics::init(kinetics::Config{}, state);
+    kinetics::init(kinetics::default_config(), state);
     for (std::size_t i = 0; i < scenario.step_count; ++i) {  // bound: the scenario's length
         const kinetics::Inputs inputs = to_inputs(scenario.steps[i]);
         kinetics::step(inputs, state, outputs);

@@ -218,7 +218,7 @@ struct ScenarioBudget {
 
 [[gnu::noinline]] ScenarioBudget measure(const scopekin::test_data::Scenario& scenario) noexcept {
     ScenarioBudget b{};
-    const scopekin::kinetics::Config config{};
+    const scopekin::kinetics::Config config = scopekin::kinetics::default_config();
     const std::uintptr_t sp = stack_pointer();
     b.depth_at_call =
         static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(__stack_top) - sp);

@@ -133,6 +133,37 @@ RandomProblem random_problem(std::mt19937_64& rng, std::size_t n, bool frictionl
 // 1. Single contact, closed forms
 // ------------------------------------------------------------------------------------------------
 
+TEST(GaussSeidelContactBlockDiagonal, OneSweepSolvesIndependentContactsAndIgnoresOffDiagonalBlocks) {
+    // Two contacts, W = diag blocks only, flagged block_diagonal, with garbage in the off-diagonal
+    // blocks (never read). Each contact is then its own single-contact problem, solved in one
+    // sweep: contact 0 sticks, f = -W^-1 q = (0.5, -0.1, 0.04) (W = diag(2, .5, .5),
+    // q = (-1, .05, -.02)); contact 1 slips, f = (0.5, -0.15, 0.2) (q = (-1, .6, -.8), mu = .5).
+    Problem p{};
+    p.contact_count = 2;
+    p.block_diagonal = true;
+    for (std::size_t a = 0; a < 2; ++a) p.block(a, a) = {2.0, 0, 0, 0, 0.5, 0, 0, 0, 0.5};
+    p.block(0, 1) = {7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0};
+    p.block(1, 0) = {-3.0, 1.0, 2.0, 5.0, -4.0, 1.0, 9.0, 9.0, 9.0};
+    p.free_displacement[0] = {-1.0, 0.05, -0.02};
+    p.free_displacement[1] = {-1.0, 0.6, -0.8};
+    p.friction[0] = 0.5;
+    p.friction[1] = 0.5;
+    Settings one_sweep = converge_to(0.0, 1);
+    one_sweep.mode = sc::SweepMode::fixed;
+    Forces f = zero_forces();
+    const auto report = sc::solve_contacts(p, one_sweep, f);
+    EXPECT_EQ(report.states[0], ContactState::sticking);
+    EXPECT_EQ(report.states[1], ContactState::slipping);
+    EXPECT_NEAR(f[0][0], 0.5, 1e-14);
+    EXPECT_NEAR(f[0][1], -0.1, 1e-14);
+    EXPECT_NEAR(f[0][2], 0.04, 1e-14);
+    EXPECT_NEAR(f[1][0], 0.5, 1e-12);
+    EXPECT_NEAR(f[1][1], -0.15, 1e-12);
+    EXPECT_NEAR(f[1][2], 0.2, 1e-12);
+    EXPECT_LE(report.residuals.complementarity, 1e-12);
+    EXPECT_LE(report.residuals.friction, 1e-12);
+}
+
 TEST(GaussSeidelContactSingle, SeparationGivesZeroForce) {
     // delta_free_n = 0.2 mm > 0: the contact opens, f = 0 whatever the tangential motion.
     const Single s = solve_single(Eigen::Vector3d(2.0, 0.5, 0.5).asDiagonal().toDenseMatrix(),

@@ -86,7 +86,10 @@ TEST(ReducedModel, RejectsTrainingThatEndsBeforeTheGrid) {
 // On the training procedure the reduced step stays close to the training (full-order) state:
 // its only deviations come from station resultants that are not exactly a contact solution
 // (a stretch's resultant can pull, f_n < 0, where its nodes touch opposite walls; its friction
-// need not point against the station's slip). Measured: tip within 1.8 mm over 20 -> 190 mm.
+// need not point against the station's slip). Measured: tip within 3.3 mm over 20 -> 190 mm in
+// these 10 mm steps (1.8 mm before the stations' slip direction followed their friction force;
+// on 5 ms steps the firmware's straight-advance reference is within 2.1 mm RMS of the full-order
+// model, tests/model/test_reduced_accuracy.cpp).
 TEST(ReducedModel, FollowsItsTrainingRunAtTheGridDepths) {
   const ReductionSettings s = short_settings();
   const ReducedModelData data = build_reduced_model(short_training(), s);
@@ -100,7 +103,7 @@ TEST(ReducedModel, FollowsItsTrainingRunAtTheGridDepths) {
     const double depth = s.depth_start_mm + s.depth_step_mm * static_cast<double>(g);
     const auto report = kinetics::reduced_step(data, depth, state, gs);
     EXPECT_EQ(report.contact.status, contact::ContactSolveStatus::converged);
-    EXPECT_NEAR(state.tip_path_mm, data.value(g, kinetics::kStationPath), 2.0) << "depth " << depth;
+    EXPECT_NEAR(state.tip_path_mm, data.value(g, kinetics::kStationPath), 3.5) << "depth " << depth;
   }
   // 190 mm inserted: all four stations (0 .. 150 mm from the tip) are inside.
   EXPECT_EQ(state.active_stations, 4U);

@@ -1,0 +1,135 @@
+// kinetics::init / kinetics::step with the generated default tables, on every target: the
+// tables' own checks, the refusal of a bad configuration, and the handling of bad input
+// (kinetics.hpp "Bad input"). Accuracy against the full-order model is tested on the host
+// (tests/model/test_reduced_accuracy.cpp).
+#include "kinetics/default_reduced_tables.hpp"
+#include "kinetics/kinetics.hpp"
+#include "portable_check.hpp"
+
+namespace {
+
+using scopekin::fixed_point::Q16_16;
+namespace kin = scopekin::kinetics;
+
+// Static: State holds the contact problem (a few KiB), too large for a small test stack.
+kin::State g_state;
+kin::Outputs g_out;
+
+kin::Inputs sample(int insertion_mm, std::uint8_t fresh = kin::kAllInputSignals) {
+    kin::Inputs in{};
+    in.insertion_mm = Q16_16::from_int(insertion_mm);
+    in.handle_force_N = Q16_16::from_int(2);
+    in.fresh_mask = fresh;
+    return in;
+}
+
+/// Advances from 20 mm to `depth_mm` at 1 mm per step (200 mm/s) and returns the last outputs.
+void advance_to(int depth_mm) {
+    kin::init(kin::default_config(), g_state);
+    for (int d = 20; d <= depth_mm; ++d) kin::step(sample(d), g_state, g_out);
+}
+
+bool has(std::uint32_t flags, std::uint32_t bit) { return (flags & bit) != 0U; }
+
+}  // namespace
+
+SCOPEKIN_TEST(ReducedTables, DefaultTablesPassShapeGridAndChecksum) {
+    const kin::ReducedTablesQ16& t = kin::default_reduced_tables();
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&t, kin::kStationCapacity) == kin::ReducedTablesFault::none);
+    SCOPEKIN_EXPECT_EQ(t.head.stations, std::size_t{12});
+    SCOPEKIN_EXPECT_EQ(t.head.depth_step_mm.raw(), Q16_16::from_int(10).raw());
+}
+
+SCOPEKIN_TEST(ReducedTables, DamagedOrMismatchedTablesAreRefused) {
+    const kin::ReducedTablesQ16& good = kin::default_reduced_tables();
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(nullptr, kin::kStationCapacity) == kin::ReducedTablesFault::missing);
+    kin::ReducedTablesQ16 wrong_checksum = good;
+    wrong_checksum.checksum ^= 1U;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&wrong_checksum, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::checksum_mismatch);
+    kin::ReducedTablesQ16 truncated = good;
+    truncated.value_count -= 1U;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&truncated, kin::kStationCapacity) == kin::ReducedTablesFault::bad_shape);
+    // A table set for more stations than the firmware's capacity.
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&good, 11U) == kin::ReducedTablesFault::bad_shape);
+    kin::ReducedTablesQ16 bad_step = good;
+    bad_step.head.inverse_depth_step = Q16_16::from_ratio(1, 5);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&bad_step, kin::kStationCapacity) == kin::ReducedTablesFault::bad_grid);
+}
+
+SCOPEKIN_TEST(KineticsStep, WithoutTablesEveryStepReportsTheConfigFaultAndNoEstimate) {
+    kin::init(kin::Config{}, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::tables);
+    kin::step(sample(300), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{kin::kFaultConfig});
+    SCOPEKIN_EXPECT_EQ(g_out.tip_path_mm.raw(), 0);
+    kin::Config zero_period = kin::default_config();
+    zero_period.period_s = Q16_16{};
+    kin::init(zero_period, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::period);
+}
+
+SCOPEKIN_TEST(KineticsStep, NoEstimateBeforeTheFirstInsertionSample) {
+    kin::init(kin::default_config(), g_state);
+    kin::step(sample(100, kin::kHandleForce), g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionStale));
+    SCOPEKIN_EXPECT_EQ(static_cast<int>(g_out.active_stations), 0);
+}
+
+SCOPEKIN_TEST(KineticsStep, EarlyAdvanceTipFollowsTheDepthWithoutFaults) {
+    // At 150 mm the scope is in the rectum and lower sigmoid: the tip lies along the centerline a
+    // little behind the depth (the shaft bends in the lumen), never ahead of it.
+    advance_to(150);
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+    SCOPEKIN_EXPECT_EQ(static_cast<int>(g_out.active_stations), 3);  // stations at 0, 50, 100 mm
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm <= Q16_16::from_int(151));
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm >= Q16_16::from_int(135));
+    SCOPEKIN_EXPECT_TRUE(!g_out.self_lock_alarm);
+    // 200 mm/s handle speed: the tip moves forward at a comparable speed.
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_velocity_mm_per_s > Q16_16::from_int(100));
+}
+
+SCOPEKIN_TEST(KineticsStep, StaleInsertionHoldsTheDepthAndRecovers) {
+    advance_to(200);
+    const Q16_16 tip = g_out.tip_path_mm;
+    kin::step(sample(260, kin::kHandleForce | kin::kHandleTorque | kin::kRoll), g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionStale));
+    const Q16_16 drift = g_out.tip_path_mm - tip;
+    SCOPEKIN_EXPECT_TRUE(drift <= Q16_16::from_ratio(1, 10) && drift >= Q16_16::from_ratio(-1, 10));
+    kin::step(sample(201), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+}
+
+SCOPEKIN_TEST(KineticsStep, OneMetreJumpIsRateLimitedFlaggedAndRecovered) {
+    advance_to(200);
+    const Q16_16 tip = g_out.tip_path_mm;
+    kin::step(sample(1200), g_state, g_out);  // 1 m in 5 ms: an encoder glitch
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionJump));
+    // The depth moved by at most 1000 mm/s * 5 ms = 5 mm, so the tip by little more.
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm - tip <= Q16_16::from_int(6));
+    SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), (Q16_16::from_int(200) + Q16_16::from_int(1000) * Q16_16::from_ratio(1, 200)).raw());
+    kin::step(sample(200), g_state, g_out);  // the glitch is gone: back within one limit
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+    SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), Q16_16::from_int(200).raw());
+}
+
+SCOPEKIN_TEST(KineticsStep, OutOfRangeInputsAreSaturatedAndFlagged) {
+    advance_to(100);
+    kin::Inputs in = sample(100);
+    in.handle_force_N = Q16_16::from_int(1000);
+    in.handle_torque_Nmm = Q16_16::from_int(-30000);
+    in.roll_rad = Q16_16::from_int(400);
+    kin::step(in, g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultForceRange));
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultTorqueRange));
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultRollRange));
+    SCOPEKIN_EXPECT_EQ(g_state.handle_force_N.raw(), Q16_16::from_int(100).raw());
+    SCOPEKIN_EXPECT_EQ(g_state.handle_torque_Nmm.raw(), Q16_16::from_int(-2000).raw());
+    // A depth below the encoder's range: saturated to -50 mm (reached at the rate limit), and
+    // below the tables' first grid depth (30 mm), so the model clamps and says so.
+    kin::init(kin::default_config(), g_state);
+    kin::step(sample(-500), g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionRange));
+    SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultDepthOutsideModel));
+    SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), Q16_16::from_int(-50).raw());
+}

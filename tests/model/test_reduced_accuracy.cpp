@@ -1,0 +1,207 @@
+// The firmware's reduced model against the full-order reference model (issue 4, section 4) and
+// the self-lock alarm against the reference's own self-lock onset (section 3), on the three
+// reference scenarios of model/scenarios/reference_*.json.
+//
+// Each scenario is run once in the full-order world (solver step 5 ms = the firmware period);
+// at every step the world's insertion depth and handle force drive
+//   * the firmware itself (kinetics::step, Q16.16, the generated default tables), and
+//   * the same reduced model in double (reduced_step<double> on the double tables that
+//     build_reduced_model makes from the same training run, the same solver settings).
+// Compared quantities (every 10th step for the full-order model, whose station probe is costly;
+// every step between fixed point and double):
+//   tip       the tip's position along the colon centerline [mm];
+//   force     per active station, the Euclidean norm of the difference of the station force
+//             vectors (n, t, s) [N] — the full-order side is the resultant of its wall forces
+//             over the station's stretch (model::station_forces).
+// The figures go to reduced_accuracy_<scenario>.json in the build directory (README "Firmware
+// accuracy").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "kinetics/default_reduced_tables.hpp"
+#include "kinetics/kinetics.hpp"
+#include "model/reduction/reduced_model.hpp"
+#include "model/scenario/procedure.hpp"
+#include "model/scenario/scenario.hpp"
+#include "model/scenario/simulation.hpp"
+
+namespace {
+
+using namespace scopekin;
+using fixed_point::Q16_16;
+
+constexpr std::size_t kFullOrderEvery = 10;  // full-order comparison every 10 steps (20 Hz)
+
+Q16_16 q16(double x) { return Q16_16::from_raw(static_cast<std::int32_t>(std::lround(x * 65536.0))); }
+double real(Q16_16 x) { return static_cast<double>(x.raw()) / 65536.0; }
+
+struct Sample {
+  double t_s = 0;
+  double depth_mm = 0;
+  double full_tip_mm = 0;
+  double fixed_tip_mm = 0;
+};
+
+struct Rms {
+  double sum = 0;
+  double max = 0;
+  std::size_t n = 0;
+  void add(double e) {
+    sum += e * e;
+    max = std::max(max, std::fabs(e));
+    ++n;
+  }
+  double value() const { return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : 0.0; }
+};
+
+struct ReferenceRun {
+  Rms tip_fixed_vs_full, force_fixed_vs_full, normal_fixed_vs_full;
+  Rms tip_fixed_vs_double, force_fixed_vs_double;
+  std::vector<Sample> samples;  // every kFullOrderEvery steps
+  std::vector<double> alarm_rises_s;
+  double period_s = 0.005;
+};
+
+const model::ReducedModelData& double_tables() {
+  static const model::ReducedModelData data = model::build_reduced_model(
+      model::read_scenario_file(std::string(SCOPEKIN_SOURCE_DIR) + "/model/scenarios/reduction_training.json"),
+      model::ReductionSettings{});
+  return data;
+}
+
+const ReferenceRun& run(const std::string& name) {
+  static std::map<std::string, ReferenceRun> cache;
+  if (auto it = cache.find(name); it != cache.end()) return it->second;
+  ReferenceRun& r = cache[name];
+  const model::Scenario scenario =
+      model::read_scenario_file(std::string(SCOPEKIN_SOURCE_DIR) + "/model/scenarios/" + name + ".json");
+  std::unique_ptr<model::World> world = model::build_world(scenario);
+  model::ProcedurePlayer player(scenario.procedure, scenario.settings.initial_insertion_mm, scenario.scope.length_mm);
+  const model::ReductionSettings settings;
+  const std::vector<std::size_t> tip_first = model::station_nodes(*world, settings);
+  const std::vector<std::size_t> increasing(tip_first.rbegin(), tip_first.rend());
+
+  static kinetics::State firmware;  // static: large
+  kinetics::init(kinetics::default_config(), firmware);
+  static kinetics::ReducedState<double, kinetics::kStationCapacity> reduced_double;
+  reduced_double = {};
+  contact::GaussSeidelSettings<double> gs;
+  gs.mode = contact::SweepMode::fixed;
+  gs.max_sweeps = firmware.config.contact_sweeps;
+  gs.local_iterations = firmware.config.contact_local_iterations;
+  const double h = world->time_step_s();
+  r.period_s = h;
+  EXPECT_NEAR(h, real(firmware.config.period_s), 1e-4) << "the reference must step at the firmware period";
+
+  bool alarm = false;
+  for (std::size_t k = 0; world->time_s() < scenario.procedure.end_s() - 1e-9; ++k) {
+    const model::HandleCommand command = player.command(world->time_s(), h, world->insertion_depth_mm(), world->roll_rad());
+    const model::WorldStepReport report = world->step(command);
+    if (!report.ok) {
+      ADD_FAILURE() << name << ": the reference run failed: " << report.failure;
+      break;
+    }
+    kinetics::Inputs in;
+    in.insertion_mm = q16(world->insertion_depth_mm());
+    in.handle_force_N = q16(world->handle_force_N());
+    in.handle_torque_Nmm = q16(world->handle_torque_Nmm());
+    in.roll_rad = q16(world->roll_rad());
+    in.fresh_mask = kinetics::kAllInputSignals;
+    kinetics::Outputs out;
+    kinetics::step(in, firmware, out);
+    (void)kinetics::reduced_step(double_tables(), real(firmware.insertion_mm), reduced_double, gs);
+
+    if (out.self_lock_alarm && !alarm) r.alarm_rises_s.push_back(world->time_s());
+    alarm = out.self_lock_alarm;
+    r.tip_fixed_vs_double.add(real(out.tip_path_mm) - reduced_double.tip_path_mm);
+    for (std::size_t j = 0; j < out.active_stations; ++j) {
+      const auto& fd = reduced_double.force_N[j];
+      const auto& ff = firmware.model.force_N[j];
+      r.force_fixed_vs_double.add(std::hypot(real(ff[0]) - fd[0], real(ff[1]) - fd[1], real(ff[2]) - fd[2]));
+    }
+    if (k % kFullOrderEvery != 0) continue;
+    const model::StationCompliance probe = world->probe_stations(increasing);
+    const std::vector<Eigen::Vector3d> full_forces = model::station_forces(*world, probe, settings);
+    const double full_tip = probe.stations.back().path_mm;
+    r.samples.push_back({world->time_s(), world->insertion_depth_mm(), full_tip, real(out.tip_path_mm)});
+    r.tip_fixed_vs_full.add(real(out.tip_path_mm) - full_tip);
+    for (std::size_t j = 0; j < out.active_stations; ++j) {
+      const auto& ff = firmware.model.force_N[j];
+      const Eigen::Vector3d fixed(real(ff[0]), real(ff[1]), real(ff[2]));
+      r.force_fixed_vs_full.add((fixed - full_forces[j]).norm());
+      r.normal_fixed_vs_full.add(fixed(0) - full_forces[j](0));
+    }
+  }
+  return r;
+}
+
+/// The reference's self-lock onset [s]: the first sample, while the handle advances, from which
+/// the tip advances less than 10 % of the handle's advance over the next 0.5 s; < 0 if none.
+double reference_onset_s(const ReferenceRun& r) {
+  const double window_s = 0.5;
+  for (std::size_t i = 0; i < r.samples.size(); ++i) {
+    std::size_t j = i;
+    while (j + 1 < r.samples.size() && r.samples[j].t_s < r.samples[i].t_s + window_s - 1e-9) ++j;
+    if (r.samples[j].t_s < r.samples[i].t_s + window_s - 1e-9) break;
+    const double handle = r.samples[j].depth_mm - r.samples[i].depth_mm;
+    const double tip = r.samples[j].full_tip_mm - r.samples[i].full_tip_mm;
+    if (handle > 2.0 && tip < 0.1 * handle) return r.samples[i].t_s;
+  }
+  return -1.0;
+}
+
+void record(const std::string& name, const ReferenceRun& r) {
+  nlohmann::json all = nlohmann::json::object();
+  const double onset = reference_onset_s(r);
+  all[name] = {{"tip_rms_mm_fixed_vs_full", r.tip_fixed_vs_full.value()},
+               {"tip_max_mm_fixed_vs_full", r.tip_fixed_vs_full.max},
+               {"force_rms_N_fixed_vs_full", r.force_fixed_vs_full.value()},
+               {"normal_force_rms_N_fixed_vs_full", r.normal_fixed_vs_full.value()},
+               {"tip_rms_mm_fixed_vs_double", r.tip_fixed_vs_double.value()},
+               {"tip_max_mm_fixed_vs_double", r.tip_fixed_vs_double.max},
+               {"force_rms_N_fixed_vs_double", r.force_fixed_vs_double.value()},
+               {"force_max_N_fixed_vs_double", r.force_fixed_vs_double.max},
+               {"reference_self_lock_onset_s", onset < 0 ? nlohmann::json(nullptr) : nlohmann::json(onset)},
+               {"self_lock_alarm_rises_s", r.alarm_rises_s}};
+  std::ofstream(std::string(SCOPEKIN_BINARY_DIR) + "/reduced_accuracy_" + name + ".json") << all.dump(2) << "\n";
+  std::cout << "[ accuracy ] " << name << ": " << all[name].dump() << "\n";
+}
+
+class ReducedAccuracy : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ReducedAccuracy, AgainstTheReducedModelInDoubleAndTheFullOrderModel) {
+  const ReferenceRun& r = run(GetParam());
+  record(GetParam(), r);
+  // Section 4, second part: the firmware's Q16.16 against the same reduced model in double.
+  EXPECT_LE(r.tip_fixed_vs_double.max, 0.05) << "tip [mm], max over the run";
+  // Forces: RMS over the run and the stations. The max is larger where a station's friction
+  // force changes direction on withdrawal: the two models can fall on different sides of that
+  // switch for a step (0.08 N measured; README "Firmware accuracy").
+  EXPECT_LE(r.force_fixed_vs_double.value(), 0.01) << "station force [N], RMS over the run and the stations";
+  // Section 4, first part, is NOT met yet (issue 4 open): these bounds only guard against the
+  // figures getting worse than measured (README); the issue's bounds are 3 mm and 0.2 N.
+  EXPECT_LE(r.tip_fixed_vs_full.value(), 12.0) << "tip RMS [mm] vs the full-order model";
+  EXPECT_LE(r.force_fixed_vs_full.value(), 3.0) << "station force RMS [N] vs the full-order model";
+}
+
+// Section 3: no self-lock alarm where no loop forms. (The alarm's latency against the
+// reference's onset on the loop scenarios is recorded in reduced_accuracy_<scenario>.json;
+// it does not meet the issue's 0.25 s yet — issue 4 open.)
+TEST(SelfLockAlarm, NeverFiresOnTheStraightAdvance) {
+  const ReferenceRun& r = run("reference_straight_advance");
+  EXPECT_LT(reference_onset_s(r), 0.0) << "the reference itself locks: the scenario is not loop-free";
+  EXPECT_TRUE(r.alarm_rises_s.empty());
+}
+
+INSTANTIATE_TEST_SUITE_P(ReferenceScenarios, ReducedAccuracy,
+                         ::testing::Values("reference_straight_advance", "reference_sigmoid_loop",
+                                           "reference_withdraw_torque"));
+
+}  // namespace
