@@ -7,6 +7,8 @@
 // (< 4000 mm) by 10 periods (>= 10 * 2^-16 s) — saturating division, flagged when it saturates.
 #include "kinetics/kinetics.hpp"
 
+#include <algorithm>
+
 namespace scopekin::kinetics {
 
 namespace {
@@ -42,12 +44,6 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
     return ConfigFault::none;
 }
 
-Q16_16 clamp(Q16_16 x, Q16_16 low, Q16_16 high) noexcept {
-    if (x < low) return low;
-    if (x > high) return high;
-    return x;
-}
-
 /// A held, range-checked signal: returns the value to use, sets the stale / range bits.
 Q16_16 validate_signal(bool fresh, Q16_16 reading, Q16_16 held, Q16_16 max_abs, std::uint32_t stale_bit,
                        std::uint32_t range_bit, std::uint32_t& faults) noexcept {
@@ -55,7 +51,7 @@ Q16_16 validate_signal(bool fresh, Q16_16 reading, Q16_16 held, Q16_16 max_abs, 
         faults |= stale_bit;
         return held;
     }
-    const Q16_16 limited = clamp(reading, fixed_point::neg_sat(max_abs), max_abs);
+    const Q16_16 limited = std::clamp(reading, fixed_point::neg_sat(max_abs), max_abs);
     if (!(limited == reading)) faults |= range_bit;
     return limited;
 }
@@ -67,7 +63,7 @@ void validate_insertion(const Inputs& inputs, State& state, std::uint32_t& fault
         faults |= kFaultInsertionStale;
         return;
     }
-    const Q16_16 reading = clamp(inputs.insertion_mm, l.insertion_min_mm, l.insertion_max_mm);
+    const Q16_16 reading = std::clamp(inputs.insertion_mm, l.insertion_min_mm, l.insertion_max_mm);
     if (!(reading == inputs.insertion_mm)) faults |= kFaultInsertionRange;
     if (!state.insertion_seen) {
         state.insertion_mm = reading;

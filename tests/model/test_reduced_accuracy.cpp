@@ -28,6 +28,7 @@
 #include "kinetics/default_reduced_tables.hpp"
 #include "kinetics/kinetics.hpp"
 #include "model/reduction/reduced_model.hpp"
+#include "model/reduction/reduced_table_writer.hpp"
 #include "model/scenario/procedure.hpp"
 #include "model/scenario/scenario.hpp"
 #include "model/scenario/simulation.hpp"
@@ -39,7 +40,8 @@ using fixed_point::Q16_16;
 
 constexpr std::size_t kFullOrderEvery = 10;  // full-order comparison every 10 steps (20 Hz)
 
-Q16_16 q16(double x) { return Q16_16::from_raw(static_cast<std::int32_t>(std::lround(x * 65536.0))); }
+/// The tables' own conversion (rounded to nearest; refuses values outside Q16.16).
+Q16_16 q16(double x) { return Q16_16::from_raw(model::q16_raw(x, "reference input")); }
 double real(Q16_16 x) { return static_cast<double>(x.raw()) / 65536.0; }
 
 struct Sample {
