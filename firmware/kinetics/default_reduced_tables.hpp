@@ -1,5 +1,5 @@
-// default_reduced_tables.hpp — the reduced model generated from the bundled training scenario
-// (model/scenarios/reduction_training.json) by model/reduction at build time; library
+// default_reduced_tables.hpp — the reduced model generated from the bundled training runs
+// (model/reduction/training.json) by model/reduction at build time; library
 // scopekin::firmware_tables.  Host builds generate it; cross builds compile the committed copy
 // firmware/kinetics/generated/default_reduced_tables.cpp, which a host test keeps identical to
 // what the generator writes (update: cmake --build build/host --target update_reduced_tables).

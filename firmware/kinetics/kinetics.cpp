@@ -159,7 +159,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     gauss_seidel.max_sweeps = config.contact_sweeps;
     gauss_seidel.local_iterations = config.contact_local_iterations;
     const ReducedStepReport<Q16_16, kStationCapacity> report =
-        reduced_step(*config.tables, state.insertion_mm, state.model, gauss_seidel);
+        reduced_step(*config.tables, state.insertion_mm, config.period_s, state.model, gauss_seidel);
     if (report.depth_clamped) faults |= kFaultDepthOutsideModel;
     const auto& residuals = report.contact.residuals;
     if (report.contact.status == contact::ContactSolveStatus::invalid_input ||
@@ -202,7 +202,12 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     const AdvanceEfficiency<>::Outputs efficiency = state.efficiency.step({model.tip_path_mm, state.insertion_mm});
     outputs.advance_efficiency = efficiency.efficiency;
     SelfLockMonitor::Inputs lock_inputs{};
-    lock_inputs.distal_sticking = outputs.distal_sticking;
+    // Self-locking is the tip's contact sticking (thesis 2.2.1): stations behind it stick in
+    // stick-slip while the tip keeps pace with the hand.
+    lock_inputs.distal_sticking = model.active_stations > 0U && outputs.stations[0].state == StationState::sticking &&
+                                          !(outputs.stations[0].normal_force_N < kMinContactForceN)
+                                      ? 1U
+                                      : 0U;
     lock_inputs.handle_advancing = efficiency.handle_advancing;
     lock_inputs.efficiency = efficiency.efficiency;
     lock_inputs.efficiency_defined = efficiency.defined;

@@ -1,7 +1,8 @@
 // kinetics.hpp — the firmware's kinetic estimator: one call per period.
 //
 //   init(config, state)          once at start-up: validates the configuration and the reduced
-//                                model's tables (shape, checksum); the only place anything is set up
+//                                model's tables (shape, segments, checksum); the only place
+//                                anything is set up
 //   step(inputs, state, outputs) every period (default 5 ms = 200 Hz): pure function of its
 //                                arguments, no heap, no static mutable data, fixed work
 //
@@ -13,8 +14,9 @@
 //   3. Outputs: the tip's position along the colon and its velocity (mean over the last
 //      kVelocityWindow steps, so it lags by half that window), each station's forces and stick /
 //      slip state, the largest contact force and where it acts.
-//   4. Monitors (firmware/monitors): advance efficiency, self-lock (distal stick while the handle
-//      advances, confirmed by falling efficiency), contact-force warning / critical.
+//   4. Monitors (firmware/monitors): advance efficiency, self-lock (the tip station stuck while
+//      the handle advances, T_on = 36 steps; confirmed by falling efficiency), contact-force
+//      warning / critical.
 //
 // Bad input (Config limits; all Q16.16):
 //   * no fresh sample: the last valid value is held and the signal's "stale" flag is set for as
@@ -54,6 +56,13 @@ struct InputLimits {
     Q16_16 roll_max_abs_rad = Q16_16::from_int(315);   ///< 50 turns, unwrapped
 };
 
+/// The kinetic estimator's self-lock settings: the monitor's defaults with T_on = 36 steps.
+inline constexpr monitors::SelfLockMonitor::Config kSelfLockConfig = [] {
+    monitors::SelfLockMonitor::Config config{};
+    config.on_steps = 36;
+    return config;
+}();
+
 struct Config {
     Q16_16 period_s = Q16_16::from_ratio(1, 200);  ///< step period (5 ms); (0, 1] s
     /// The reduced model (kinetics/default_reduced_tables.hpp for the generated default set).
@@ -65,7 +74,10 @@ struct Config {
     std::uint16_t contact_local_iterations = 6;
     InputLimits limits{};
     monitors::AdvanceEfficiency<>::Config efficiency{};
-    monitors::SelfLockMonitor::Config self_lock{};
+    /// Self-lock: raised after the tip station has stuck for 36 steps (0.18 s) while the hand
+    /// advances (README "Alarms": the reference model's tip stalls up to 31 steps in stick-slip
+    /// where no loop forms, and 41 steps at the first stall of the sigmoid loop).
+    monitors::SelfLockMonitor::Config self_lock{kSelfLockConfig};
     monitors::ContactForceMonitor::Config contact_force{};
 };
 

@@ -54,7 +54,7 @@ enum FaultFlag : std::uint32_t {
     kFaultRollRange = 1U << 8U,
     kFaultContactResidual = 1U << 9U,     ///< the contact solve left a residual above its bound
     kFaultSaturation = 1U << 10U,         ///< an internal quantity hit its fixed-point limit
-    kFaultDepthOutsideModel = 1U << 11U,  ///< depth outside the tables' grid: clamped to it
+    kFaultDepthOutsideModel = 1U << 11U,  ///< depth outside the reduced model's travel run in use (default 20..760 mm): clamped to it
     kFaultConfig = 1U << 12U,             ///< init refused the configuration: no estimate
     kFaultMonitorInput = 1U << 13U,       ///< a monitor rejected its input (held its output)
 };

@@ -4,69 +4,87 @@
 // ------------------------------------------------------------------------------------------------
 // The reduction (trajectory piecewise-linear, Rewieński & White 2003; built by model/reduction)
 // ------------------------------------------------------------------------------------------------
-// The scope inside the colon stays close to a path that insertion depth s moves it along. The
-// full-order model (model/world: co-rotational Timoshenko scope, hollow-beam colon, Gauss-Seidel
-// contact, implicit dynamics) is run offline over a training procedure — a slow advance through
-// the colon — and at every grid depth s_g (a fixed step apart) it leaves:
+// The scope inside the colon stays close to states that the hand's history moves it through.
+// The full-order model (model/world: co-rotational Timoshenko scope, hollow-beam colon,
+// Gauss-Seidel contact, implicit dynamics) is run offline over TRAINING RUNS
+// (model/reduction/training.json), and along each run it leaves, at every KNOT:
 //   * K contact STATIONS: scope points at fixed distances from the tip (station 0 = the tip),
 //     each with its contact frame (n from the wall to the scope, t along the colon, s = n x t);
-//   * per station: its position along the colon centerline p_g [mm], its gap to the wall g_g
-//     [mm, >= 0] and the resultant wall force over the stretch of scope it stands for,
-//     f_g = (f_n, f_t, f_s) [N] in its frame;
-//   * the quasi-static compliance between the stations W_g [mm/N] (3K x 3K, symmetric): the
-//     scope's tangent compliance with the handle held + the colon's compliance + the wall's.
+//   * per station: its position along the colon centerline p [mm], its gap to the wall g
+//     [mm, >= 0], the resultant wall force over the stretch of scope it stands for,
+//     f_ref = (f_n, f_t, f_s) [N] in its frame, and the sign of the stretch's slip to the next
+//     knot (+1, -1, 0 = stuck);
+//   * every `compliance_every` knots, each station's compliance [mm/N] (see "Compliance").
+// Training runs (segments), and which one a step uses:
+//   * travel runs, keyed by depth [mm]: segment 0 advances over the model's whole depth range
+//     (default: 20 -> 760 mm at 20 mm/s, a knot every 1 mm); others advance or withdraw over
+//     part of it (default: the withdrawal 680 -> 560 mm that straightens the sigmoid loop, a
+//     knot every 0.75 mm);
+//   * hold runs, keyed by the time the hand has held the depth still [s] (default: 2.5 s at
+//     680 mm, in which the loaded scope relaxes and is rolled 90°, a knot every 0.05 s).
+// The step latches the hand's DIRECTION (reversed once the depth has gone back 0.5 mm from its
+// extreme since the last turn; the first move after a hold sets it at once) and counts the HOLD
+// time (consecutive steps that move the depth by <= 0.01 mm). While held within 0.5 mm of a hold
+// run's depth it uses that run; otherwise the travel run in its direction whose depths hold the
+// depth; otherwise segment 0. Moving to another run starts every station on that run's state.
 // Station friction: a station's force is the resultant over a curved stretch of scope whose
 // nodes each slide with |f_T| = mu f_n on their own wall normal, so the resultant's |f_T| / f_n
 // is not mu — below it on a straight stretch, above it where the normals spread around a bend.
-// Where the training slid a stretch (its path position advanced), the station's coefficient is
-// that ratio: the training state then lies on the station's cone, as a sliding contact must;
-// where the stretch stuck, it is max(mu, 1.05 x ratio), so the training state lies inside.
-// Station gap: 0 where the stretch carries a wall force (in contact, even if the station's own
-// node stands off the wall), the node's gap otherwise.
+// The step derives each station's coefficient from the training force: where the training slid
+// the stretch it is that ratio (the training force lies on the station's cone, as a sliding
+// contact's must); where the stretch stuck, max(mu, 1.05 x ratio) (the force lies inside). The
+// training's slip over a step is |Delta p| against the friction force, -f_T / |f_T| (Coulomb:
+// slip opposite the friction force) — so the training state solves every step that repeats the
+// training's inputs, in either direction of travel.
+// Passive stations: a stretch whose resultant pulls (f_n < 0, its nodes press on opposite
+// walls) or lies far outside any cone (|f_T| > 8 f_n) is no single contact; such a station
+// follows the training (f = f_ref, u = 0) for as long as that holds.
+// Station gap: 0 where the training force presses on the wall, the station node's gap otherwise.
+// Compliance: each station's compliance with the other stations held (the inverse of its
+// diagonal block of the stations' stiffness W^-1, static condensation), split into the normal
+// compliance W_nn and the tangential block with the normal held by the wall, W_TT - W_Tn W_nT /
+// W_nn. Normal and tangential deviations are decoupled: with a strong n-T coupling and station
+// friction ratios up to ~2, the linear station problem has two solutions near the locked tip
+// (stay in contact, or spring off the wall) and Gauss-Seidel took the wrong one.
 // What is kept: the contact mechanics at the stations (Signorini + Coulomb, the thesis's
-// Delassus form, Eq. 4.19-4.24) linearised about the training state at the current depth, and
-// history (stick, slip, the elastic deviation it causes). What is dropped: inertia and damping
-// (the hand moves the scope slowly: the training procedure is quasi-static), contacts away from
-// the stations (each station carries its stretch's resultant), the scope's own rotation (in the
-// full-order model contacts act on the centerline, so roll does not load them either), and the
-// nonlinearity between grid points (linear interpolation), and the coupling between stations:
-// W_g is block diagonal, each station's compliance with the other stations held (the inverse of
-// its diagonal block of the stations' stiffness W^-1, static condensation). The coupling the
-// training state carries is kept; a deviation at one station does not spread to the next.
-// (The full coupled quasi-static compliance — a cantilever's, up to ~1300 mm/N at the tip —
-// made the deviations drift without bound and Gauss-Seidel stall: the stations have no opposite
-// wall in this model to stop them.) Why the error should stay small: on the training procedure
-// the model follows the training state (u stays near 0) and elsewhere deviates from it only
-// through the contact solve — stations sticking where the training slid, or slipping backwards on
-// withdrawal — and those deviations are elastic and local, u = W (f - f_g).
+// Delassus form, Eq. 4.19-4.24) linearised about the training state, and history (stick, slip,
+// the elastic deviation u it causes). What is dropped: inertia and damping beyond what the
+// training runs carried, contacts away from the stations (each station carries its stretch's
+// resultant), the coupling between stations (a deviation at one station does not spread to the
+// next; the full coupled quasi-static compliance — a cantilever's, up to ~1300 mm/N at the tip —
+// made deviations drift without bound), and the nonlinearity between knots (linear
+// interpolation).
+// Why the error stays small: on a training run the model reproduces the full-order state at the
+// knots (u = 0, f = f_ref; tests/model/test_reduced_model.cpp), and between knots it interpolates
+// — knots 1 mm apart (0.05 s at 20 mm/s) follow the full-order model's stick-slip. Away from the
+// training runs it deviates only through the contact solve (stations sticking where the training
+// slid, slipping backwards on a reversal), elastically and locally, u = W (f - f_ref); there its
+// error grows with the distance from the training (README "Firmware accuracy": measured on a
+// procedure it was not trained on).
 // Because W is block diagonal the station problems are independent: the Gauss-Seidel solve
 // (the one solver, ContactProblem::block_diagonal set) is exact after one sweep.
-// STATUS (issue 4, in progress): the firmware's step runs this model (kinetics.cpp). Measured
-// against the full-order model on the reference scenarios (tests/model/test_reduced_accuracy):
-// straight advance tip RMS 2.1 mm, station force RMS 0.91 N; sigmoid loop 9.6 mm, 1.75 N;
-// withdrawal 9.3 mm, 2.6 N — not yet the issue's 3 mm / 0.2 N. Two causes found so far: the
-// full-order model's stick-slip between 340 and 560 mm depends on speed and on its own time step
-// (tip up to 20-28 mm apart between runs at 17 and 25 mm/s, or 5 and 10 ms steps), which no
-// depth-indexed table can follow; and at the locked tip the station frame (n from the station
-// node's wall) does not match the force, which pushes head-on into the bend (|f_T| / f_n ~ 3).
 //
 // ------------------------------------------------------------------------------------------------
 // One step (period h; units mm, N)
 // ------------------------------------------------------------------------------------------------
-// Interpolate p, g, f_ref, W at the depth s. State: u_prev (the elastic deviation of each
-// station from the training state, station frame) and p_prev (the training path position of
-// each station at the previous step). The contact problem of the step, per station a
-// (delta = W f + delta_free, solved by the one Gauss-Seidel solver, fixed sweeps, warm start):
+// Choose the run, interpolate p, g, f_ref, the slip signs s and W at its key. State: u_prev (the
+// elastic deviation of each station from the training state, station frame) and p_prev (the
+// training path position of each station at the previous step). The contact problem of the
+// step, per station a (delta = W f + delta_free, solved by the one Gauss-Seidel solver, fixed
+// sweeps, warm start):
 //   normal   : delta_n = gap after the step          = g_a + (W (f - f_ref))_a,n
 //   tangents : delta_T = slip over the step          = training slip + u_a,T - u_prev,a,T
 // with u = W (f - f_ref), hence
-//   delta_free,a = ( g_a,  Delta p_a - u_prev,a,t,  r_a Delta p_a - u_prev,a,s ) - (W f_ref)_a,
-// Delta p_a = p_a - p_prev,a, where r_a = f_ref,s / f_ref,t (clamped to +-1) turns the
-// training's advance into its slip direction: Coulomb slip is opposite the friction force, so
-// the training state solves the step when the inputs repeat the training's.
+//   delta_free,a = ( g_a,  slip_a - u_prev,a,T ) - (W f_ref)_a,
+//   slip_a = s_a (p_a - p_prev,a) (-f_ref,T / |f_ref,T|)  (0 where the training stuck).
 // After the solve u = W (f - f_ref); the tip's position along the colon is p_0 + u_0,t.
-// Stations not yet inside the body (s <= arc from the tip) are left out; they enter with
+// Stations not yet inside the body (depth <= arc from the tip) are left out; they enter with
 // u = 0 and the training force as warm start.
+//
+// Fixed point (Q16.16, fixed_point/RANGES.md): keys are divided by the knot step (no rounded
+// reciprocal); ratios |f_T| / f_n are formed only when |f_T| <= 8 f_n (<= 8, no saturation); the
+// slip direction f_T / |f_T| is <= 1 in magnitude; the hold time is counted in integer steps
+// (capped at 30000) and is period x steps <= 151 s.
 #pragma once
 
 #include <array>
@@ -77,53 +95,84 @@
 
 namespace scopekin::kinetics {
 
-/// Values per station per grid point, in this order.
+/// Values per station per knot, in this order.
 enum ReducedStationValue : std::size_t {
-    kStationPath = 0,    ///< p [mm]
-    kStationGap = 1,     ///< g [mm]
-    kStationForceN = 2,  ///< f_n [N]
-    kStationForceT = 3,  ///< f_t [N]
-    kStationForceS = 4,  ///< f_s [N]
-    kStationFriction = 5,  ///< Coulomb coefficient of the station (see "Station friction")
+    kStationPath = 0,      ///< p [mm]
+    kStationGap = 1,       ///< g [mm]
+    kStationForceN = 2,    ///< f_n [N]
+    kStationForceT = 3,    ///< f_t [N]
+    kStationForceS = 4,    ///< f_s [N]
+    kStationSlid = 5,      ///< the training's slip from this knot to the next: +1 the stretch slid
+                           ///< towards larger path positions, -1 towards smaller ones, 0 it stuck
     kStationValueCount = 6,
 };
 
-/// Size of one grid point's record: K station records, the tip's position (x, y, z) [mm, body
-/// frame] and, per station, the upper triangle (00 01 02 11 12 22) of its 3x3 compliance block.
-constexpr std::size_t reduced_record_size(std::size_t stations) noexcept {
-    return stations * kStationValueCount + 3U + stations * 6U;
+/// Size of one knot record: K station records, then the training tip's position (x, y, z) [mm,
+/// body frame].
+constexpr std::size_t reduced_knot_size(std::size_t stations) noexcept {
+    return stations * kStationValueCount + 3U;
 }
 
-/// Index of W_aa(i, j) (i, j < 3) of station a in the record.
-constexpr std::size_t compliance_index(std::size_t stations, std::size_t station, std::size_t i, std::size_t j) noexcept {
-    const std::size_t r = i < j ? i : j;
-    const std::size_t c = i < j ? j : i;
-    // Row r of a 3x3 upper triangle starts at 0, 3, 5.
-    const std::size_t row_start = r == 0U ? 0U : (r == 1U ? 3U : 5U);
-    return stations * kStationValueCount + 3U + station * 6U + row_start + (c - r);
+/// Values per station per compliance record [mm/N]: the normal compliance and the tangential
+/// 2x2 block (see "Compliance"), in this order.
+enum ReducedComplianceValue : std::size_t {
+    kComplianceNN = 0,
+    kComplianceTT = 1,
+    kComplianceTS = 2,
+    kComplianceSS = 3,
+    kComplianceValueCount = 4,
+};
+
+constexpr std::size_t reduced_compliance_size(std::size_t stations) noexcept {
+    return stations * kComplianceValueCount;
 }
 
-/// Integer -> Scalar (exact for the small counts used here).
+/// Training runs (segments) the tables can hold.
+constexpr std::size_t kMaxReducedSegments = 4;
+
+/// Integer <-> Scalar (exact for the small counts used here).
 template <typename Scalar>
 struct ReducedScalarTraits {
     static Scalar from_int(int value) noexcept { return static_cast<Scalar>(value); }
+    /// floor(x) for 0 <= x < 2^31.
+    static int floor_int(Scalar x) noexcept { return static_cast<int>(x); }
+};
+
+/// Kinds of training run.
+enum ReducedSegmentKind : int {
+    kSegmentTravel = 0,  ///< keyed by depth [mm]: the hand advancing or withdrawing
+    kSegmentHold = 1,    ///< keyed by the time the hand has held the depth still [s]
+};
+
+/// One training run: knots at key_start + i * key_step, i < knots (a travel run's in increasing
+/// depth whatever the direction it moved in; a hold run's in increasing hold time from 0).
+template <typename Scalar>
+struct ReducedSegment {
+    int kind{kSegmentTravel};
+    int direction{1};               ///< travel: +1 trained advancing, -1 withdrawing; hold: +1
+    Scalar key_start{};             ///< travel: first knot's depth [mm]; hold: 0 [s]
+    Scalar key_step{};              ///< travel: [mm]; hold: [s]
+    Scalar hold_depth_mm{};         ///< hold: the depth held; travel: 0
+    std::size_t knots{0};            ///< >= 2, (knots - 1) a multiple of compliance_every
+    std::size_t first_knot{0};       ///< index of knot 0 in the tables' knot records
+    std::size_t first_compliance{0}; ///< index of its compliance record 0
 };
 
 /// The tables' fixed facts (same meaning for every Scalar).
 template <typename Scalar>
 struct ReducedModelHeader {
-    std::size_t stations{0};        ///< K, <= the state's capacity
-    std::size_t grid_points{0};     ///< >= 2
-    Scalar depth_start_mm{};        ///< s_0
-    Scalar depth_step_mm{};         ///< grid step
-    Scalar inverse_depth_step{};    ///< 1 / grid step [1/mm]
-    Scalar friction{};              ///< Coulomb mu of every station
-    Scalar station_spacing_mm{};    ///< station j is j * spacing from the tip
+    std::size_t stations{0};          ///< K, <= the state's capacity
+    std::size_t compliance_every{1};  ///< knots per compliance record interval
+    Scalar friction{};                ///< Coulomb mu of the colon wall
+    Scalar station_spacing_mm{};      ///< station j is j * spacing from the tip
+    std::size_t segment_count{0};     ///< 1..kMaxReducedSegments; segment 0 trained advancing
+    std::array<ReducedSegment<Scalar>, kMaxReducedSegments> segments{};
 };
 
 /// What a Tables type provides (duck-typed, no virtual calls):
 ///   const ReducedModelHeader<Scalar>& header() const;
-///   Scalar value(std::size_t grid_point, std::size_t index_in_record) const;
+///   Scalar value(std::size_t knot, std::size_t index_in_knot_record) const;
+///   Scalar compliance(std::size_t record, std::size_t index_in_compliance_record) const;
 
 template <typename Scalar, std::size_t Stations>
 struct ReducedState {
@@ -133,7 +182,13 @@ struct ReducedState {
     std::array<contact::ContactVec3<Scalar>, Stations> elastic_mm{};      ///< u, station frame
     std::array<Scalar, Stations> reference_path_mm{};                     ///< p at the last step
     std::array<contact::ContactState, Stations> contact_state{};
+    std::array<bool, Stations> passive{};  ///< the station follows the training this step
     std::size_t active_stations{0};
+    std::size_t segment{0};                ///< training run in use
+    int direction{1};                      ///< +1 advancing, -1 withdrawing (latched, see "Direction")
+    Scalar turn_depth_mm{};                ///< deepest (advancing) / shallowest (withdrawing) depth since the last turn
+    Scalar last_depth_mm{};                ///< the depth of the last step
+    std::uint32_t hold_steps{0};           ///< consecutive steps the depth has been held still (capped)
     Scalar tip_path_mm{};
     std::array<Scalar, 3> tip_position_mm{};  ///< training tip position at the depth (body frame)
     bool started{false};
@@ -142,8 +197,35 @@ struct ReducedState {
 template <typename Scalar, std::size_t Stations>
 struct ReducedStepReport {
     contact::ContactSolveReport<Scalar, Stations> contact{};
-    bool depth_clamped{false};  ///< the depth was outside the grid and was clamped to it
+    bool depth_clamped{false};  ///< the depth was outside the travel run in use and was clamped to it
 };
+
+/// Cap of a station's friction ratio |f_T| / f_n; beyond it the station is passive.
+constexpr int kMaxStationFrictionRatio = 8;
+
+/// Where the training stuck, the station's cone is widened to hold its force with this margin.
+template <typename Scalar>
+Scalar stuck_margin() noexcept {
+    return ReducedScalarTraits<Scalar>::from_int(21) / ReducedScalarTraits<Scalar>::from_int(20);  // 1.05
+}
+
+/// Depth the hand must go back before the model takes the travel direction as reversed, and
+/// the distance from a hold run's depth within which a hold uses that run [mm].
+template <typename Scalar>
+Scalar reverse_hysteresis_mm() noexcept {
+    return ReducedScalarTraits<Scalar>::from_int(1) / ReducedScalarTraits<Scalar>::from_int(2);  // 0.5 mm
+}
+
+/// A step that moves the depth by at most this much holds it still [mm] (2 mm/s at 200 Hz).
+template <typename Scalar>
+Scalar still_step_mm() noexcept {
+    return ReducedScalarTraits<Scalar>::from_int(1) / ReducedScalarTraits<Scalar>::from_int(100);  // 0.01 mm
+}
+
+/// Hold steps are counted up to this (150 s at 5 ms; past a hold run's last knot its last state
+/// is used). Counted in integer steps and turned into seconds by one product (RANGES.md: elapsed
+/// time is never summed from the period).
+constexpr std::uint32_t kMaxHoldSteps = 30000U;
 
 namespace detail {
 
@@ -152,45 +234,122 @@ Scalar lerp(Scalar a, Scalar b, Scalar weight) noexcept {
     return a + weight * (b - a);
 }
 
+/// Last knot's key of a segment.
+template <typename Scalar>
+Scalar segment_end_mm(const ReducedSegment<Scalar>& segment) noexcept {
+    return segment.key_start +
+           segment.key_step * ReducedScalarTraits<Scalar>::from_int(static_cast<int>(segment.knots - 1U));
+}
+
+/// Interval index and weight of x in [0, intervals] (clamped).
+template <typename Scalar>
+std::size_t interval_of(Scalar x, std::size_t intervals, Scalar& weight) noexcept {
+    const int floor_x = ReducedScalarTraits<Scalar>::floor_int(x);
+    std::size_t index = floor_x < 0 ? 0U : static_cast<std::size_t>(floor_x);
+    if (index + 1U > intervals) index = intervals - 1U;
+    weight = x - ReducedScalarTraits<Scalar>::from_int(static_cast<int>(index));
+    return index;
+}
+
 }  // namespace detail
 
-/// One step at insertion depth `depth_mm` (validated by the caller).  Fixed work: K stations,
-/// `gauss_seidel.max_sweeps` sweeps when gauss_seidel.mode is fixed.
+/// One step at insertion depth `depth_mm` (validated by the caller), `period_s` after the last
+/// one.  Fixed work: K stations, `gauss_seidel.max_sweeps` sweeps when gauss_seidel.mode is fixed.
 template <typename Scalar, std::size_t Stations, typename Tables>
-ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar depth_mm,
+ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar depth_mm, Scalar period_s,
                                                  ReducedState<Scalar, Stations>& state,
                                                  const contact::GaussSeidelSettings<Scalar>& gauss_seidel) noexcept {
     using T = contact::ContactScalarTraits<Scalar>;
+    using R = ReducedScalarTraits<Scalar>;
     const ReducedModelHeader<Scalar>& head = tables.header();
     ReducedStepReport<Scalar, Stations> report{};
     const std::size_t k_stations = head.stations <= Stations ? head.stations : Stations;
 
-    // Grid cell and weight; the depth is clamped to the grid.
-    const Scalar last_depth = head.depth_start_mm + head.depth_step_mm * ReducedScalarTraits<Scalar>::from_int(static_cast<int>(head.grid_points - 1U));
-    Scalar depth = depth_mm;
-    if (depth < head.depth_start_mm) {
-        depth = head.depth_start_mm;
-        report.depth_clamped = true;
+    // Holds and direction (see "Training runs"). A step that moves the depth by no more than
+    // still_step holds it; the hold time counts consecutive such steps. The direction is
+    // latched: it reverses once the depth has gone back by the hysteresis from its extreme since
+    // the last turn, and the first move after a hold sets it at once.
+    const bool still = state.started && !(T::abs(depth_mm - state.last_depth_mm) > still_step_mm<Scalar>());
+    if (!state.started) {
+        state.direction = 1;
+        state.turn_depth_mm = depth_mm;
+    } else if (!still && state.hold_steps > 0U) {
+        state.direction = depth_mm < state.last_depth_mm ? -1 : 1;
+        state.turn_depth_mm = depth_mm;
+    } else if (state.direction > 0) {
+        if (depth_mm > state.turn_depth_mm) state.turn_depth_mm = depth_mm;
+        else if (depth_mm < state.turn_depth_mm - reverse_hysteresis_mm<Scalar>()) {
+            state.direction = -1;
+            state.turn_depth_mm = depth_mm;
+        }
+    } else {
+        if (depth_mm < state.turn_depth_mm) state.turn_depth_mm = depth_mm;
+        else if (depth_mm > state.turn_depth_mm + reverse_hysteresis_mm<Scalar>()) {
+            state.direction = 1;
+            state.turn_depth_mm = depth_mm;
+        }
     }
-    if (depth > last_depth) {
-        depth = last_depth;
-        report.depth_clamped = true;
+    if (still) {
+        if (state.hold_steps < kMaxHoldSteps) ++state.hold_steps;
+    } else {
+        state.hold_steps = 0U;
     }
-    // Divided, not multiplied by the stored 1/step: in Q16.16 the rounded reciprocal (6554 raw for
-    // 1/10 mm) would shift the cell by 6e-5 per cell, 0.04 mm of path at 700 mm.
-    const Scalar cells = (depth - head.depth_start_mm) / head.depth_step_mm;
-    std::size_t cell = 0;
-    for (std::size_t g = 1; g + 1U < head.grid_points; ++g) {  // bound: grid points
-        if (ReducedScalarTraits<Scalar>::from_int(static_cast<int>(g)) <= cells) cell = g;
+    const Scalar hold_s = period_s * R::from_int(static_cast<int>(state.hold_steps));
+    state.last_depth_mm = depth_mm;
+
+    // Training run: while held, a hold run at this depth; else the last travel run in this
+    // direction whose depths hold the depth; else segment 0 (trained advancing over the model's
+    // whole depth range).
+    std::size_t segment_index = 0;
+    const std::size_t segment_count = head.segment_count <= kMaxReducedSegments ? head.segment_count : kMaxReducedSegments;
+    bool holding = false;
+    for (std::size_t i = 1; i < segment_count; ++i) {  // bound: kMaxReducedSegments
+        const ReducedSegment<Scalar>& candidate = head.segments[i];
+        if (candidate.kind == kSegmentHold) {
+            if (state.hold_steps > 0U &&
+                !(T::abs(depth_mm - candidate.hold_depth_mm) > reverse_hysteresis_mm<Scalar>())) {
+                segment_index = i;
+                holding = true;
+            }
+        } else if (!holding && candidate.direction == state.direction && !(depth_mm < candidate.key_start) &&
+                   !(depth_mm > detail::segment_end_mm(candidate))) {
+            segment_index = i;
+        }
     }
-    const Scalar weight = cells - ReducedScalarTraits<Scalar>::from_int(static_cast<int>(cell));
-    const std::size_t next = cell + 1U;
+    const ReducedSegment<Scalar>& segment = head.segments[segment_index];
+    // A change of training run starts every station again on the new run's state.
+    if (state.started && segment_index != state.segment) state.active_stations = 0;
+    state.segment = segment_index;
+
+    // Knot interval and weight; the key is clamped to the run (a travel run's depth: flagged).
+    Scalar key = holding ? hold_s : depth_mm;
+    if (key < segment.key_start) {
+        key = segment.key_start;
+        report.depth_clamped = !holding;
+    }
+    if (key > detail::segment_end_mm(segment)) {
+        key = detail::segment_end_mm(segment);
+        report.depth_clamped = !holding;
+    }
+    const Scalar depth = holding ? segment.hold_depth_mm : key;
+    // Divided, not multiplied by a rounded reciprocal: in Q16.16 that would shift the interval
+    // by up to 1/2 LSB of 1/step per interval.
+    const Scalar cells = (key - segment.key_start) / segment.key_step;
+    Scalar weight{};
+    const std::size_t cell = detail::interval_of(cells, segment.knots - 1U, weight);
+    const std::size_t knot = segment.first_knot + cell;
+    const std::size_t next = knot + 1U;
+    Scalar compliance_weight{};
+    const std::size_t compliance_cell = detail::interval_of(
+        cells / R::from_int(static_cast<int>(head.compliance_every)), (segment.knots - 1U) / head.compliance_every,
+        compliance_weight);
+    const std::size_t record = segment.first_compliance + compliance_cell;
 
     // Stations inside the body: station j at j * spacing from the tip is inside once the depth
     // exceeds that (a prefix of the stations, the tip first).
     std::size_t active = 0;
     for (std::size_t j = 0; j < k_stations; ++j) {  // bound: Stations
-        if (head.station_spacing_mm * ReducedScalarTraits<Scalar>::from_int(static_cast<int>(j)) < depth) active = j + 1U;
+        if (head.station_spacing_mm * R::from_int(static_cast<int>(j)) < depth) active = j + 1U;
     }
 
     // Interpolated training state.
@@ -198,29 +357,32 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     std::array<Scalar, Stations> gap{};
     for (std::size_t j = 0; j < active; ++j) {  // bound: Stations
         const std::size_t base = j * kStationValueCount;
-        path[j] = detail::lerp(tables.value(cell, base + kStationPath), tables.value(next, base + kStationPath), weight);
-        gap[j] = detail::lerp(tables.value(cell, base + kStationGap), tables.value(next, base + kStationGap), weight);
+        path[j] = detail::lerp(tables.value(knot, base + kStationPath), tables.value(next, base + kStationPath), weight);
+        gap[j] = detail::lerp(tables.value(knot, base + kStationGap), tables.value(next, base + kStationGap), weight);
         for (std::size_t c = 0; c < 3U; ++c) {
-            state.reference_force_N[j][c] = detail::lerp(tables.value(cell, base + kStationForceN + c),
+            state.reference_force_N[j][c] = detail::lerp(tables.value(knot, base + kStationForceN + c),
                                                          tables.value(next, base + kStationForceN + c), weight);
         }
     }
     const std::size_t tip_base = k_stations * kStationValueCount;
     for (std::size_t c = 0; c < 3U; ++c) {
-        state.tip_position_mm[c] = detail::lerp(tables.value(cell, tip_base + c), tables.value(next, tip_base + c), weight);
+        state.tip_position_mm[c] = detail::lerp(tables.value(knot, tip_base + c), tables.value(next, tip_base + c), weight);
     }
     auto& problem = state.problem;
     problem.contact_count = active;
     problem.block_diagonal = true;  // the off-diagonal blocks are never read
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations blocks of 9
-        for (std::size_t i = 0; i < 3U; ++i) {
-            for (std::size_t j = 0; j < 3U; ++j) {
-                const std::size_t index = compliance_index(k_stations, a, i, j);
-                problem.block(a, a)[3U * i + j] = detail::lerp(tables.value(cell, index), tables.value(next, index), weight);
-            }
-        }
-        const std::size_t base = a * kStationValueCount + kStationFriction;
-        problem.friction[a] = detail::lerp(tables.value(cell, base), tables.value(next, base), weight);
+        const std::size_t base = a * kComplianceValueCount;
+        const auto compliance = [&](std::size_t v) {
+            return detail::lerp(tables.compliance(record, base + v), tables.compliance(record + 1U, base + v), compliance_weight);
+        };
+        auto& block = problem.block(a, a);
+        block = {};
+        block[0] = compliance(kComplianceNN);
+        block[4] = compliance(kComplianceTT);
+        block[5] = compliance(kComplianceTS);
+        block[7] = block[5];
+        block[8] = compliance(kComplianceSS);
     }
 
     // Newly entered stations start on the training state.
@@ -234,31 +396,52 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         state.force_N[a] = contact::ContactVec3<Scalar>{};
         state.elastic_mm[a] = contact::ContactVec3<Scalar>{};
         state.contact_state[a] = contact::ContactState::separated;
+        state.passive[a] = false;
     }
 
-    // delta_free = (g, p - p_prev - u_prev,t, -u_prev,s) - W f_ref  (W block diagonal).
+    // Station friction and the training's slip over the step (see "Station friction"):
+    //   ratio = |f_ref,T| / f_ref,n;  mu_a = ratio where the training slid, max(mu, 1.05 ratio)
+    //   where it stuck;  slip = (s_a Delta p_a) (-f_ref,T / |f_ref,T|) where it slid, 0 where
+    //   it stuck (s_a = the training's slip sign, kStationSlid).
+    // delta_free = (g, slip - u_prev,T) - W f_ref  (W block diagonal).
+    const Scalar max_ratio = R::from_int(kMaxStationFrictionRatio);
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations
+        const contact::ContactVec3<Scalar>& f_ref = state.reference_force_N[a];
+        const Scalar tangential = T::hypot(f_ref[1], f_ref[2]);
+        const Scalar slip_sign = tables.value(knot, a * kStationValueCount + kStationSlid);
+        const bool slid = !(slip_sign == T::zero());
+        // A stretch whose resultant pulls (f_n < 0: its nodes touch opposite walls) or lies far
+        // outside any cone: the station follows the training (see "Passive stations").
+        state.passive[a] = f_ref[0] < T::zero() || tangential > max_ratio * f_ref[0];
+        const Scalar ratio = f_ref[0] > T::zero() && !state.passive[a] ? tangential / f_ref[0] : T::zero();
+        const Scalar stuck_mu = stuck_margin<Scalar>() * ratio;
+        problem.friction[a] = slid ? ratio : (stuck_mu < head.friction ? head.friction : stuck_mu);
+
+        // The path moved by Delta p this step; the training slid by |Delta p| against its
+        // friction force when the motion has the training's sign.
+        const Scalar moved = path[a] - state.reference_path_mm[a];
+        const Scalar along = slip_sign * moved;
+        Scalar slip_t = T::zero();
+        Scalar slip_s = T::zero();
+        if (slid) {
+            if (tangential > T::zero()) {
+                slip_t = T::zero() - along * (f_ref[1] / tangential);
+                slip_s = T::zero() - along * (f_ref[2] / tangential);
+            } else {
+                slip_t = moved;
+            }
+        }
         contact::ContactVec3<Scalar> w_f{};
         const auto& block = problem.block(a, a);
         for (std::size_t i = 0; i < 3U; ++i) {
-            for (std::size_t j = 0; j < 3U; ++j) w_f[i] = w_f[i] + block[3U * i + j] * state.reference_force_N[a][j];
+            for (std::size_t j = 0; j < 3U; ++j) w_f[i] = w_f[i] + block[3U * i + j] * f_ref[j];
         }
-        // The training's slip over the step: along the path by the advance, and sideways as its
-        // friction force says (Coulomb: slip opposite f_T, so slip_s / slip_t = f_s / f_t),
-        // the ratio clamped to +-1 where f_t is small.
-        const Scalar advance = path[a] - state.reference_path_mm[a];
-        const Scalar ft = state.reference_force_N[a][1];
-        const Scalar fs = state.reference_force_N[a][2];
-        const Scalar one = ReducedScalarTraits<Scalar>::from_int(1);
-        Scalar lateral_ratio = T::zero();
-        if (T::abs(fs) < T::abs(ft)) {
-            lateral_ratio = fs / ft;
-        } else if (!(fs == T::zero())) {
-            lateral_ratio = (fs < T::zero()) == (ft < T::zero()) ? one : T::zero() - one;
-        }
-        problem.free_displacement[a] = {gap[a] - w_f[0],
-                                        advance - state.elastic_mm[a][1] - w_f[1],
-                                        advance * lateral_ratio - state.elastic_mm[a][2] - w_f[2]};
+        // A station whose training force presses on the wall is in contact (its interpolated
+        // gap can be > 0 next to a knot where the stretch pulled or stood off).
+        const Scalar gap_mm = f_ref[0] > T::zero() ? T::zero() : gap[a];
+        problem.free_displacement[a] = {gap_mm - w_f[0],
+                                        slip_t - state.elastic_mm[a][1] - w_f[1],
+                                        slip_s - state.elastic_mm[a][2] - w_f[2]};
     }
 
     report.contact = contact::solve_contacts(problem, gauss_seidel, state.force_N);
@@ -271,6 +454,13 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
             for (std::size_t j = 0; j < 3U; ++j) {
                 u[i] = u[i] + block[3U * i + j] * (state.force_N[a][j] - state.reference_force_N[a][j]);
             }
+        }
+        if (state.passive[a]) {
+            state.force_N[a] = state.reference_force_N[a];
+            u = contact::ContactVec3<Scalar>{};
+            report.contact.states[a] = tables.value(knot, a * kStationValueCount + kStationSlid) == T::zero()
+                                           ? contact::ContactState::sticking
+                                           : contact::ContactState::slipping;
         }
         state.elastic_mm[a] = u;
         state.reference_path_mm[a] = path[a];

@@ -2,13 +2,17 @@
 // flash, generated from the full-order model by model/reduction (see reduced_kinetics.hpp for the
 // method and the record layout) and checked by a checksum at init.
 //
-// Format: `values` holds grid_points records of reduced_record_size(stations) int32 raw Q16.16
-// numbers each (record g at values + g * record_size), in the units of reduced_kinetics.hpp
-// (mm, N, mm/N, dimensionless friction).  Every value was rounded to nearest from double by the
-// generator, which refuses values outside Q16.16 (|x| >= 32768) instead of saturating them.
-// Checksum: FNV-1a (32 bit) over the header's raw fields and then every value, each int32 taken
-// as its four little-endian bytes — the same on every target, so a table that was truncated,
-// damaged in flash or paired with the wrong header is caught at init (kinetics::init).
+// Format: `knot_values` holds the knot records of every segment, one after the other
+// (reduced_knot_size(stations) int32 raw Q16.16 numbers each, segment i's knot k at record
+// segments[i].first_knot + k); `compliance_values` holds the compliance records
+// (reduced_compliance_size(stations) each, one every `compliance_every` knots of a segment, at
+// segments[i].first_compliance + r).  Units as in reduced_kinetics.hpp (mm, N, mm/N, 0/1 flags).
+// Every value was rounded to nearest from double by the generator, which refuses values outside
+// Q16.16 (|x| >= 32768) instead of saturating them.
+// Checksum: FNV-1a (32 bit) over the header's fields (integers, and the raw Q16.16 numbers), then
+// every knot value and every compliance value, each int32 taken as its four little-endian bytes
+// — the same on every target, so a table that was truncated, damaged in flash or paired with the
+// wrong header is caught at init (kinetics::init).
 #pragma once
 
 #include <cstddef>
@@ -24,35 +28,47 @@ using fixed_point::Q16_16;
 template <>
 struct ReducedScalarTraits<Q16_16> {
     static Q16_16 from_int(int value) noexcept { return Q16_16::from_int(value); }
+    /// floor(x): the integer part of the raw value (arithmetic shift).
+    static int floor_int(Q16_16 x) noexcept { return static_cast<int>(x.raw() >> Q16_16::fraction_bits); }
 };
 
 /// Generated reduced-model tables (Tables interface of reduced_step).
 struct ReducedTablesQ16 {
     ReducedModelHeader<Q16_16> head{};
-    const std::int32_t* values{nullptr};  ///< grid_points * record_size raw Q16.16 values
-    std::size_t value_count{0};           ///< = grid_points * record_size
-    std::uint32_t checksum{0};            ///< reduced_tables_checksum(*this) when intact
-    const char* source{""};               ///< training scenario and generator, for reports
+    const std::int32_t* knot_values{nullptr};        ///< knot records, raw Q16.16
+    std::size_t knot_value_count{0};
+    const std::int32_t* compliance_values{nullptr};  ///< compliance records, raw Q16.16
+    std::size_t compliance_value_count{0};
+    std::uint32_t checksum{0};                       ///< reduced_tables_checksum(*this) when intact
+    const char* source{""};                          ///< training and generator, for reports
 
     [[nodiscard]] const ReducedModelHeader<Q16_16>& header() const noexcept { return head; }
-    [[nodiscard]] std::size_t record_size() const noexcept { return reduced_record_size(head.stations); }
     /// Unchecked: indices come from reduced_step, bounded by the header validated at init.
-    [[nodiscard]] Q16_16 value(std::size_t grid_point, std::size_t index) const noexcept {
-        return Q16_16::from_raw(values[grid_point * record_size() + index]);
+    [[nodiscard]] Q16_16 value(std::size_t knot, std::size_t index) const noexcept {
+        return Q16_16::from_raw(knot_values[knot * reduced_knot_size(head.stations) + index]);
+    }
+    [[nodiscard]] Q16_16 compliance(std::size_t record, std::size_t index) const noexcept {
+        return Q16_16::from_raw(compliance_values[record * reduced_compliance_size(head.stations) + index]);
     }
 };
 
-/// FNV-1a over the header fields (stations, grid_points, then the raw values of depth_start,
-/// depth_step, inverse_depth_step, friction, station_spacing) and the values.
+/// FNV-1a over the header (stations, compliance_every, raw friction and station spacing,
+/// segment_count, then per segment kind, direction, raw key start, key step and hold depth,
+/// knots, first_knot, first_compliance), the knot values and the compliance values.
 [[nodiscard]] std::uint32_t reduced_tables_checksum(const ReducedTablesQ16& tables) noexcept;
 
 /// Why a table set cannot be used (none = it can).
 enum class ReducedTablesFault : std::uint8_t {
     none,
     missing,            ///< null pointer or no values
-    bad_shape,          ///< stations outside 1..Stations, fewer than 2 grid points, or the value
-                        ///< count does not match grid_points * record_size
-    bad_grid,           ///< depth step or station spacing not positive, or 1/step inconsistent
+    bad_shape,          ///< stations outside 1..Stations, no segment or too many, a segment with
+                        ///< fewer than 2 knots or knots not a whole number of compliance
+                        ///< intervals, records not laid out one segment after the other, or
+                        ///< value counts that do not match the records
+    bad_grid,           ///< a key step, the station spacing or mu not positive, a key start
+                        ///< below 0, a segment that is neither a travel run (direction +-1)
+                        ///< nor a hold run (from 0 s, at a depth >= 0), or segment 0 not a
+                        ///< travel run trained advancing
     checksum_mismatch,  ///< the data is not what the generator wrote
 };
 

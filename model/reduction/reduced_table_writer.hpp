@@ -3,7 +3,7 @@
 // data: every value rounded to nearest (Q16.16 raw = round(x * 2^16)), the FNV-1a checksum of
 // firmware/kinetics/reduced_tables.hpp, and a C++ source file that defines
 // scopekin::kinetics::default_reduced_tables() (declared in kinetics/default_reduced_tables.hpp).
-// The output depends only on the data: the same training scenario gives the same bytes.
+// The output depends only on the data: the same training runs give the same bytes.
 #include <cstdint>
 #include <iosfwd>
 #include <string>
@@ -14,8 +14,9 @@
 namespace scopekin::model {
 
 struct ReducedTablesRaw {
-  kinetics::ReducedModelHeader<std::int32_t> head;  ///< Q16.16 raw (stations / grid_points plain)
-  std::vector<std::int32_t> values;                 ///< records one after the other
+  kinetics::ReducedModelHeader<std::int32_t> head;  ///< Q16.16 raw (counts and directions plain)
+  std::vector<std::int32_t> knot_values;            ///< knot records one after the other
+  std::vector<std::int32_t> compliance_values;      ///< compliance records one after the other
   std::uint32_t checksum = 0;
 };
 

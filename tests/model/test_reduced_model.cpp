@@ -31,11 +31,17 @@ Scenario short_training() {
 
 ReductionSettings short_settings() {
   ReductionSettings s;
+  s.source = "short_settings";
   s.stations = 4;
   s.station_spacing_mm = 50.0;
-  s.depth_start_mm = 30.0;
-  s.depth_step_mm = 10.0;
-  s.depth_end_mm = 190.0;
+  s.compliance_every = 4;
+  ReductionSegmentSpec advance;
+  advance.scenario = short_training();
+  advance.direction = 1;
+  advance.depth_from_mm = 30.0;
+  advance.depth_to_mm = 190.0;
+  advance.step_mm = 10.0;
+  s.segments.push_back(advance);
   return s;
 }
 
@@ -74,36 +80,55 @@ TEST(StationProbe, StraightScopeTipComplianceIsTheCantilever) {
 TEST(ReducedModel, RejectsStationsOffTheNodes) {
   ReductionSettings s = short_settings();
   s.station_spacing_mm = 55.0;  // elements are 10 mm
-  EXPECT_THROW(build_reduced_model(short_training(), s), ModelError);
+  EXPECT_THROW(build_reduced_model(s), ModelError);
 }
 
-TEST(ReducedModel, RejectsTrainingThatEndsBeforeTheGrid) {
+TEST(ReducedModel, RejectsTrainingThatEndsBeforeTheLastKnot) {
   ReductionSettings s = short_settings();
-  s.depth_end_mm = 400.0;
-  EXPECT_THROW(build_reduced_model(short_training(), s), ModelError);
+  s.segments[0].depth_to_mm = 390.0;
+  EXPECT_THROW(build_reduced_model(s), ModelError);
 }
 
-// On the training procedure the reduced step stays close to the training (full-order) state:
-// its only deviations come from station resultants that are not exactly a contact solution
-// (a stretch's resultant can pull, f_n < 0, where its nodes touch opposite walls; its friction
-// need not point against the station's slip). Measured: tip within 3.3 mm over 20 -> 190 mm in
-// these 10 mm steps (1.8 mm before the stations' slip direction followed their friction force;
-// on 5 ms steps the firmware's straight-advance reference is within 2.1 mm RMS of the full-order
-// model, tests/model/test_reduced_accuracy.cpp).
-TEST(ReducedModel, FollowsItsTrainingRunAtTheGridDepths) {
+TEST(ReducedModel, RejectsBadSegments) {
+  ReductionSettings withdraw_first = short_settings();
+  withdraw_first.segments[0].direction = -1;
+  std::swap(withdraw_first.segments[0].depth_from_mm, withdraw_first.segments[0].depth_to_mm);
+  EXPECT_THROW(withdraw_first.validate(), ModelError);
+  ReductionSettings backwards = short_settings();
+  backwards.segments[0].depth_to_mm = 10.0;
+  EXPECT_THROW(backwards.validate(), ModelError);
+  ReductionSettings ragged = short_settings();
+  ragged.compliance_every = 3;  // 16 intervals
+  EXPECT_THROW(ragged.validate(), ModelError);
+  ReductionSettings off_step = short_settings();
+  off_step.segments[0].depth_to_mm = 185.0;
+  EXPECT_THROW(off_step.validate(), ModelError);
+}
+
+// On the training procedure, at the knots, the reduced step reproduces the training (full-order)
+// state: the station friction puts the training force on its cone where the stretch slid and
+// inside it where it stuck, the training slip follows the friction force, and stations whose
+// resultant no cone holds follow the training (reduced_kinetics.hpp). Expected: the training
+// run's own tip path and station forces.
+TEST(ReducedModel, ReproducesItsTrainingRunAtTheKnots) {
   const ReductionSettings s = short_settings();
-  const ReducedModelData data = build_reduced_model(short_training(), s);
-  ASSERT_EQ(data.records.size(), 17U);
+  const ReducedModelData data = build_reduced_model(s);
+  ASSERT_EQ(data.knots.size(), 17U);
+  ASSERT_EQ(data.compliances.size(), 5U);
   static kinetics::ReducedState<double, 4> state;
   contact::GaussSeidelSettings<double> gs;
   gs.mode = contact::SweepMode::until_converged;
   gs.tolerance = 1e-10;
   gs.max_sweeps = 50;
-  for (std::size_t g = 0; g < data.records.size(); ++g) {
-    const double depth = s.depth_start_mm + s.depth_step_mm * static_cast<double>(g);
-    const auto report = kinetics::reduced_step(data, depth, state, gs);
+  for (std::size_t g = 0; g < data.knots.size(); ++g) {
+    const double depth = 30.0 + 10.0 * static_cast<double>(g);
+    const auto report = kinetics::reduced_step(data, depth, 0.4, state, gs);  // 25 mm/s
     EXPECT_EQ(report.contact.status, contact::ContactSolveStatus::converged);
-    EXPECT_NEAR(state.tip_path_mm, data.value(g, kinetics::kStationPath), 3.5) << "depth " << depth;
+    EXPECT_NEAR(state.tip_path_mm, data.value(g, kinetics::kStationPath), 1e-6) << "depth " << depth;
+    for (std::size_t j = 0; j < state.active_stations; ++j)
+      for (std::size_t c = 0; c < 3; ++c)
+        EXPECT_NEAR(state.force_N[j][c], data.value(g, j * kinetics::kStationValueCount + kinetics::kStationForceN + c), 1e-6)
+            << "depth " << depth << " station " << j;
   }
   // 190 mm inserted: all four stations (0 .. 150 mm from the tip) are inside.
   EXPECT_EQ(state.active_stations, 4U);

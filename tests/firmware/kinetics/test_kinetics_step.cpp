@@ -37,7 +37,8 @@ SCOPEKIN_TEST(ReducedTables, DefaultTablesPassShapeGridAndChecksum) {
     const kin::ReducedTablesQ16& t = kin::default_reduced_tables();
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&t, kin::kStationCapacity) == kin::ReducedTablesFault::none);
     SCOPEKIN_EXPECT_EQ(t.head.stations, std::size_t{12});
-    SCOPEKIN_EXPECT_EQ(t.head.depth_step_mm.raw(), Q16_16::from_int(10).raw());
+    SCOPEKIN_EXPECT_EQ(t.head.segments[0].key_step.raw(), Q16_16::from_int(1).raw());  // 1 mm knots
+    SCOPEKIN_EXPECT_EQ(t.head.segments[0].direction, 1);
 }
 
 SCOPEKIN_TEST(ReducedTables, DamagedOrMismatchedTablesAreRefused) {
@@ -48,13 +49,19 @@ SCOPEKIN_TEST(ReducedTables, DamagedOrMismatchedTablesAreRefused) {
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&wrong_checksum, kin::kStationCapacity) ==
                          kin::ReducedTablesFault::checksum_mismatch);
     kin::ReducedTablesQ16 truncated = good;
-    truncated.value_count -= 1U;
+    truncated.knot_value_count -= 1U;
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&truncated, kin::kStationCapacity) == kin::ReducedTablesFault::bad_shape);
     // A table set for more stations than the firmware's capacity.
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&good, 11U) == kin::ReducedTablesFault::bad_shape);
     kin::ReducedTablesQ16 bad_step = good;
-    bad_step.head.inverse_depth_step = Q16_16::from_ratio(1, 5);
+    bad_step.head.segments[0].key_step = Q16_16{};
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&bad_step, kin::kStationCapacity) == kin::ReducedTablesFault::bad_grid);
+    kin::ReducedTablesQ16 withdraw_first = good;
+    withdraw_first.head.segments[0].direction = -1;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&withdraw_first, kin::kStationCapacity) == kin::ReducedTablesFault::bad_grid);
+    kin::ReducedTablesQ16 overlapping = good;
+    overlapping.head.segments[1].first_knot -= 1U;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&overlapping, kin::kStationCapacity) == kin::ReducedTablesFault::bad_shape);
 }
 
 SCOPEKIN_TEST(KineticsStep, WithoutTablesEveryStepReportsTheConfigFaultAndNoEstimate) {
@@ -126,10 +133,47 @@ SCOPEKIN_TEST(KineticsStep, OutOfRangeInputsAreSaturatedAndFlagged) {
     SCOPEKIN_EXPECT_EQ(g_state.handle_force_N.raw(), Q16_16::from_int(100).raw());
     SCOPEKIN_EXPECT_EQ(g_state.handle_torque_Nmm.raw(), Q16_16::from_int(-2000).raw());
     // A depth below the encoder's range: saturated to -50 mm (reached at the rate limit), and
-    // below the tables' first grid depth (30 mm), so the model clamps and says so.
+    // below the tables' first knot (20 mm), so the model clamps and says so.
     kin::init(kin::default_config(), g_state);
     kin::step(sample(-500), g_state, g_out);
     SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionRange));
     SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultDepthOutsideModel));
     SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), Q16_16::from_int(-50).raw());
+}
+
+// The training run in use follows the hand (reduced_kinetics.hpp, "Training runs"): segment 0
+// advances, 1 is the hold at 680 mm, 2 the withdrawal 680 -> 560 mm (model/reduction/training.json).
+SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
+    const kin::ReducedModelHeader<Q16_16>& head = kin::default_reduced_tables().header();
+    SCOPEKIN_EXPECT_EQ(head.segment_count, std::size_t{3});
+    SCOPEKIN_EXPECT_EQ(head.segments[1].kind, static_cast<int>(kin::kSegmentHold));
+    SCOPEKIN_EXPECT_EQ(head.segments[2].direction, -1);
+    advance_to(680);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
+    for (int i = 0; i < 100; ++i) kin::step(sample(680), g_state, g_out);  // 0.5 s held still
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{1});
+    SCOPEKIN_EXPECT_EQ(g_state.model.hold_steps, std::uint32_t{100});
+    // The first move after the hold sets the direction at once: withdrawing, the withdrawal run.
+    kin::step(sample(679), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{2});
+    for (int d = 678; d >= 600; --d) kin::step(sample(d), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{2});
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+    // Below the withdrawal run's depths: back to segment 0, still withdrawing.
+    for (int d = 599; d >= 500; --d) kin::step(sample(d), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
+    SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+}
+
+SCOPEKIN_TEST(KineticsStep, DepthJitterBelowTheHysteresisDoesNotReverseTheDirection) {
+    advance_to(600);
+    kin::Inputs in = sample(600);
+    in.insertion_mm = Q16_16::from_ratio(5996, 10);  // 0.4 mm back: within the 0.5 mm hysteresis
+    kin::step(in, g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.direction, 1);
+    in.insertion_mm = Q16_16::from_ratio(5994, 10);  // 0.6 mm back: reversed
+    kin::step(in, g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
 }
