@@ -24,8 +24,8 @@
 //     680 mm, in which the loaded scope relaxes and is rolled 90°, a knot every 0.05 s).
 // The step latches the hand's DIRECTION (reversed once the depth has gone back 0.5 mm from its
 // extreme since the last turn; the first move after a hold sets it at once) and counts the HOLD
-// time (consecutive steps that move the depth by <= 0.01 mm). While held within 0.5 mm of a hold
-// run's depth it uses that run; otherwise the travel run in its direction whose depths hold the
+// time (consecutive steps that move the depth by <= 0.01 mm; a hold counts from 4 such steps).
+// While held within 0.5 mm of a hold run's depth it uses that run; otherwise the travel run in its direction whose depths hold the
 // depth; otherwise segment 0. Moving to another run starts every station on that run's state.
 // Station friction: a station's force is the resultant over a curved stretch of scope whose
 // nodes each slide with |f_T| = mu f_n on their own wall normal, so the resultant's |f_T| / f_n
@@ -222,6 +222,10 @@ Scalar still_step_mm() noexcept {
     return ReducedScalarTraits<Scalar>::from_int(1) / ReducedScalarTraits<Scalar>::from_int(100);  // 0.01 mm
 }
 
+/// A hold counts (for the hold runs and for setting the direction on the next move) from this
+/// many still steps on (20 ms): one stale sample, which the estimator holds, is not a hold.
+constexpr std::uint32_t kMinHoldSteps = 4U;
+
 /// Hold steps are counted up to this (150 s at 5 ms; past a hold run's last knot its last state
 /// is used). Counted in integer steps and turned into seconds by one product (RANGES.md: elapsed
 /// time is never summed from the period).
@@ -268,12 +272,12 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     // Holds and direction (see "Training runs"). A step that moves the depth by no more than
     // still_step holds it; the hold time counts consecutive such steps. The direction is
     // latched: it reverses once the depth has gone back by the hysteresis from its extreme since
-    // the last turn, and the first move after a hold sets it at once.
+    // the last turn, and the first move after a hold (>= kMinHoldSteps) sets it at once.
     const bool still = state.started && !(T::abs(depth_mm - state.last_depth_mm) > still_step_mm<Scalar>());
     if (!state.started) {
         state.direction = 1;
         state.turn_depth_mm = depth_mm;
-    } else if (!still && state.hold_steps > 0U) {
+    } else if (!still && state.hold_steps >= kMinHoldSteps) {
         state.direction = depth_mm < state.last_depth_mm ? -1 : 1;
         state.turn_depth_mm = depth_mm;
     } else if (state.direction > 0) {
@@ -306,7 +310,7 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     for (std::size_t i = 1; i < segment_count; ++i) {  // bound: kMaxReducedSegments
         const ReducedSegment<Scalar>& candidate = head.segments[i];
         if (candidate.kind == kSegmentHold) {
-            if (state.hold_steps > 0U &&
+            if (state.hold_steps >= kMinHoldSteps &&
                 !(T::abs(depth_mm - candidate.hold_depth_mm) > reverse_hysteresis_mm<Scalar>())) {
                 segment_index = i;
                 holding = true;

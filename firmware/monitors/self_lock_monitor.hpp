@@ -56,6 +56,10 @@
 //   => worst case <= 0.15 s after the stick state appears in the estimate, leaving >= 0.1 s of
 //      the 0.25 s acceptance bound for the estimator's own lag behind the reference model.
 //   The efficiency confirms (< 0.5) about 26 steps (0.13 s) after a dead stop of the tip.
+//   The kinetic estimator (kinetics.hpp, kSelfLockConfig) sets on_steps = 36 instead: in the
+//   reference model the tip stalls for up to 31 steps in the stick-slip of a normal advance, so
+//   20 would raise the alarm where no loop forms (README "Alarms"). Its latency is then 0.175 s
+//   with the hand pushing, at most 0.22 s from rest.
 //
 // False alarms kept out
 // ---------------------
