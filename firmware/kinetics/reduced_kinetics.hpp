@@ -409,11 +409,13 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     //   it stuck (s_a = the training's slip sign, kStationSlid).
     // delta_free = (g, slip - u_prev,T) - W f_ref  (W block diagonal).
     const Scalar max_ratio = R::from_int(kMaxStationFrictionRatio);
+    std::array<bool, Stations> training_slid{};
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations
         const contact::ContactVec3<Scalar>& f_ref = state.reference_force_N[a];
         const Scalar tangential = T::hypot(f_ref[1], f_ref[2]);
         const Scalar slip_sign = tables.value(knot, a * kStationValueCount + kStationSlid);
         const bool slid = !(slip_sign == T::zero());
+        training_slid[a] = slid;
         // A stretch whose resultant pulls (f_n < 0: its nodes touch opposite walls) or lies far
         // outside any cone: the station follows the training (see "Passive stations").
         state.passive[a] = f_ref[0] < T::zero() || tangential > max_ratio * f_ref[0];
@@ -462,9 +464,7 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         if (state.passive[a]) {
             state.force_N[a] = state.reference_force_N[a];
             u = contact::ContactVec3<Scalar>{};
-            report.contact.states[a] = tables.value(knot, a * kStationValueCount + kStationSlid) == T::zero()
-                                           ? contact::ContactState::sticking
-                                           : contact::ContactState::slipping;
+            report.contact.states[a] = training_slid[a] ? contact::ContactState::slipping : contact::ContactState::sticking;
         }
         state.elastic_mm[a] = u;
         state.reference_path_mm[a] = path[a];
