@@ -13,9 +13,11 @@ PACKAGES=(
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   qemu-user qemu-system-arm
-  python3
+  python3 python3-canmatrix
+  clang-14 libclang-rt-14-dev
+  qemu-system-x86 busybox-static can-utils cpio xz-utils
 )
-ALL_PRESETS=(host asan aarch64 cortex-m4)
+ALL_PRESETS=(host asan aarch64 cortex-m4 fuzz)
 BUILD_JOBS=2
 
 usage() {

@@ -1,0 +1,120 @@
+// sensor_box.hpp — the box's cyclic executive: once per period, read → step → monitor → publish.
+//
+//   read     drain the CAN receive queue (at most kMaxFramesPerPeriod frames per period; the rest
+//            wait in the backend's queue for the next period), hand each frame to its driver,
+//            track the controller's health from error frames; service the serial sensors
+//            (EM tracker, tip force: validated, counted and flagged; their samples are for the
+//            test bench's recording and are not inputs of the estimator)
+//   step     kinetics::step on the handle sensors' inputs (the estimator validates them again and
+//            holds stale signals)
+//   monitor  the estimator's monitors (self-lock, contact force) run inside step
+//   publish  KineticEstimate, ContactSummary, Alarms, one StationForces and one BoxCounters frame
+//            every period; BoxStatus every `status_every_periods` and at once in any period whose
+//            fault bits differ from the last BoxStatus sent
+//
+// It uses only the HAL interfaces (hal::CanBus, hal::SerialPort); `main` picks the backends and
+// the clock and calls run_period() at each release.  No heap, no exceptions; all state is in the
+// object, which `main` keeps in static storage.
+//
+// Faults: a sensor that stops sending is flagged stale in the first period its last sample is
+// older than HandleSensorConfig::stale_after_us (default 3 periods); the kinetics holds its
+// last value and sets its own stale flag in every period without a fresh sample, so the next
+// BoxStatus (sent at once because the bits changed) reports it, and KineticEstimate.InputsStale
+// marks the held estimate.  When samples return, the flags clear the same way.
+#pragma once
+
+#include <cstdint>
+
+#include "executive/box_faults.hpp"
+#include "executive/can_health.hpp"
+#include "hal/can_bus.hpp"
+#include "hal/drivers/em_tracker_driver.hpp"
+#include "hal/drivers/handle_sensors.hpp"
+#include "hal/serial_port.hpp"
+#include "kinetics/kinetics.hpp"
+#include "protocol/can/scopekin_messages.hpp"
+
+namespace scopekin::executive {
+
+/// Frames read per period at most (bounded work).  At 1 kHz per sensor and 5 ms periods the box
+/// sees 10 input frames per period; 128 leaves room for 64 ms periods or bursts.
+inline constexpr std::uint16_t kMaxFramesPerPeriod = 128;
+
+struct BoxConfig {
+    std::uint32_t period_us{5000};             ///< 1 ms .. 1 s; sets kinetics.period_s
+    kinetics::Config kinetics{};               ///< period_s is overwritten from period_us
+    drivers::HandleSensorConfig handle_sensors{};
+    hal::EmTrackerDriverConfig em_tracker{};
+    std::uint16_t status_every_periods{20};    ///< heartbeat: 100 ms at 5 ms
+    std::uint32_t send_timeout_us{0};          ///< per frame; 0: never block the period
+};
+
+struct BoxCounters {
+    std::uint32_t periods{0};
+    std::uint32_t frames_read{0};        ///< everything received (data and error frames)
+    std::uint32_t unknown_ids{0};        ///< data frames no driver claimed
+    std::uint32_t frames_published{0};
+    std::uint32_t send_failures{0};
+    std::uint32_t period_overruns{0};    ///< as reported by main's timer
+};
+
+class SensorBox {
+public:
+    /// Validates the configuration and initialises the estimator.  `serial` may be null (no
+    /// test-bench sensors).  Returns false if the estimator refused its configuration: the box
+    /// still runs and publishes, with BoxState no_estimate and EstimateValid 0.
+    bool init(const BoxConfig& config, hal::CanBus& can, hal::SerialPort* serial);
+
+    /// One period released at `now_us` (the clock of the CAN backend's timestamps).
+    /// `period_overruns` is main's running count of skipped periods.
+    void run_period(std::uint64_t now_us, std::uint32_t period_overruns);
+
+    [[nodiscard]] const kinetics::Outputs& outputs() const { return outputs_; }
+    [[nodiscard]] const BoxCounters& counters() const { return counters_; }
+    [[nodiscard]] const drivers::HandleSensors& handle_sensors() const { return handle_sensors_; }
+    [[nodiscard]] const hal::EmTrackerDriver& em_tracker() const { return em_tracker_; }
+    /// BoxStatus.TrackerFaults of the last period (0 without a serial port).
+    [[nodiscard]] std::uint8_t tracker_faults() const { return tracker_faults_; }
+    [[nodiscard]] const CanHealth& can_health() const { return can_health_; }
+    [[nodiscard]] const hal::CanCounters can_counters() const { return can_->counters(); }
+    /// Driver fault bits of the last period (DriverFault).
+    [[nodiscard]] std::uint16_t driver_faults() const { return driver_faults_; }
+    [[nodiscard]] protocol::BoxState box_state() const { return box_state_; }
+
+private:
+    void read_can();
+    void read_serial(std::uint64_t now_us);
+    void publish(const hal::CanFrame& frame);
+    void publish_outputs();
+    void publish_status(bool faults_changed);
+    [[nodiscard]] std::uint32_t counter_value(protocol::BoxCounterIndex index) const;
+
+    BoxConfig config_{};
+    hal::CanBus* can_{nullptr};
+    hal::SerialPort* serial_{nullptr};
+    bool estimator_ok_{false};
+    kinetics::State kinetics_{};
+    kinetics::Outputs outputs_{};
+    drivers::HandleSensors handle_sensors_{};
+    hal::EmTrackerDriver em_tracker_{};
+    std::uint8_t tracker_faults_{0};
+    CanHealth can_health_{};
+    BoxCounters counters_{};
+    protocol::BoxState box_state_{protocol::BoxState::starting};
+    std::uint16_t driver_faults_{0};
+    std::uint16_t period_faults_{0};      ///< gathered during the period
+    std::uint32_t last_can_dropped_{0};
+    std::uint16_t last_status_driver_faults_{0};
+    std::uint16_t last_status_kinetic_faults_{0};
+    std::uint8_t last_status_tracker_faults_{0};
+    std::uint16_t periods_since_status_{0};
+    std::uint8_t heartbeat_{0};
+    std::uint8_t station_cursor_{0};
+    std::uint8_t counter_cursor_{0};
+    std::uint8_t self_lock_raised_{0};
+    std::uint8_t critical_raised_{0};
+    bool last_self_lock_{false};
+    bool last_critical_{false};
+};
+
+}  // namespace scopekin::executive

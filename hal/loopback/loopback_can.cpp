@@ -1,0 +1,68 @@
+// loopback_can.cpp — see loopback_can.hpp.
+#include "hal/loopback/loopback_can.hpp"
+
+namespace scopekin::hal {
+
+bool LoopbackCanEndpoint::push(LoopbackCanQueue& queue, const CanFrame& frame) {
+    if (queue.count == kLoopbackCanCapacity) {
+        return false;
+    }
+    const std::size_t tail = (queue.head + queue.count) % kLoopbackCanCapacity;
+    queue.frames[tail] = ReceivedCanFrame{frame, clock_->now_us()};
+    ++queue.count;
+    return true;
+}
+
+CanStatus LoopbackCanEndpoint::send(const CanFrame& frame, std::uint32_t /*timeout_us*/) {
+    if (!is_valid_can_frame(frame) || frame.error) {
+        ++counters_.send_failures;
+        return CanStatus::invalid;
+    }
+    if (bus_off_) {
+        ++counters_.send_failures;
+        return CanStatus::bus_off;
+    }
+    if (!push(*outgoing_, frame)) {
+        // On a real bus the frame leaves; the receiver's buffer overflows.  Same here.
+        if (peer_ != nullptr) {
+            ++peer_->counters_.dropped;
+        }
+    }
+    ++counters_.sent;
+    return CanStatus::ok;
+}
+
+CanStatus LoopbackCanEndpoint::receive(ReceivedCanFrame& received, std::uint32_t /*timeout_us*/) {
+    // Simulated time does not pass while waiting: an empty queue stays empty.
+    if (incoming_->count == 0) {
+        return CanStatus::timeout;
+    }
+    received = incoming_->frames[incoming_->head];
+    incoming_->head = (incoming_->head + 1U) % kLoopbackCanCapacity;
+    --incoming_->count;
+    if (received.frame.error) {
+        ++counters_.error_frames;
+        if ((received.frame.id & kCanErrorBusOff) != 0U) {
+            ++counters_.bus_off_events;
+        }
+    } else {
+        ++counters_.received;
+    }
+    return CanStatus::ok;
+}
+
+CanCounters LoopbackCanEndpoint::counters() const { return counters_; }
+
+void LoopbackCanEndpoint::inject_error(std::uint32_t classes,
+                                       const std::array<std::uint8_t, 8>& data) {
+    CanFrame frame{};
+    frame.error = true;
+    frame.id = classes & kCanExtendedIdMask;
+    frame.length = kCanMaxLength;
+    frame.data = data;
+    if (!push(*incoming_, frame)) {
+        ++counters_.dropped;
+    }
+}
+
+}  // namespace scopekin::hal

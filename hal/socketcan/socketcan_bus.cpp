@@ -1,0 +1,234 @@
+// socketcan_bus.cpp — see socketcan_bus.hpp.
+#include "hal/socketcan/socketcan_bus.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+#include <vector>
+
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+namespace scopekin::hal {
+
+namespace {
+
+std::string system_reason(const char* what) {
+    return std::string{what} + ": " + std::strerror(errno);
+}
+
+std::uint64_t clock_us(clockid_t clock) {
+    timespec now{};
+    clock_gettime(clock, &now);
+    return static_cast<std::uint64_t>(now.tv_sec) * 1000000U +
+           static_cast<std::uint64_t>(now.tv_nsec) / 1000U;
+}
+
+/// Waits until the socket is ready for `events` or `timeout_us` passes.
+bool wait_ready(int socket, short events, std::uint32_t timeout_us) {
+    pollfd descriptor{socket, events, 0};
+    const int timeout_ms = static_cast<int>((timeout_us + 999U) / 1000U);
+    for (;;) {
+        const int ready = ::poll(&descriptor, 1, timeout_ms);
+        if (ready < 0 && errno == EINTR) {
+            return false;  // a signal: let the caller's loop look at its stop flag
+        }
+        return ready > 0;
+    }
+}
+
+can_frame to_kernel(const CanFrame& frame) {
+    can_frame kernel{};
+    if (frame.error) {
+        kernel.can_id = (frame.id & CAN_ERR_MASK) | CAN_ERR_FLAG;
+    } else if (frame.extended) {
+        kernel.can_id = (frame.id & CAN_EFF_MASK) | CAN_EFF_FLAG;
+    } else {
+        kernel.can_id = frame.id & CAN_SFF_MASK;
+    }
+    if (frame.remote) {
+        kernel.can_id |= CAN_RTR_FLAG;
+    }
+    kernel.len = frame.length;
+    std::memcpy(kernel.data, frame.data.data(), frame.length);
+    return kernel;
+}
+
+CanFrame from_kernel(const can_frame& kernel) {
+    CanFrame frame{};
+    frame.error = (kernel.can_id & CAN_ERR_FLAG) != 0U;
+    frame.extended = !frame.error && (kernel.can_id & CAN_EFF_FLAG) != 0U;
+    frame.remote = !frame.error && (kernel.can_id & CAN_RTR_FLAG) != 0U;
+    if (frame.error) {
+        frame.id = kernel.can_id & CAN_ERR_MASK;
+    } else {
+        frame.id = kernel.can_id & (frame.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+    }
+    frame.length = kernel.len > CAN_MAX_DLEN ? std::uint8_t{CAN_MAX_DLEN} : kernel.len;
+    std::memcpy(frame.data.data(), kernel.data, frame.length);
+    return frame;
+}
+
+}  // namespace
+
+SocketCanBus::~SocketCanBus() { close(); }
+
+void SocketCanBus::close() {
+    if (socket_ >= 0) {
+        ::close(socket_);
+        socket_ = -1;
+    }
+}
+
+bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
+    close();
+    counters_ = {};
+    const std::string where = "CAN interface '" + config.interface + "'";
+    if (config.interface.empty() || config.interface.size() >= IFNAMSIZ) {
+        error = where + ": the name must have 1 to " + std::to_string(IFNAMSIZ - 1) + " characters";
+        return false;
+    }
+    const int fd = ::socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
+    if (fd < 0) {
+        error = where + ": " + system_reason("socket(PF_CAN, SOCK_RAW, CAN_RAW)") +
+                (errno == EAFNOSUPPORT ? " (this kernel has no CAN support: load the can and "
+                                         "can-raw modules)"
+                                       : "");
+        return false;
+    }
+    socket_ = fd;
+    const unsigned int index = if_nametoindex(config.interface.c_str());
+    if (index == 0U) {
+        error = where + ": " + system_reason("no such interface (if_nametoindex)");
+        close();
+        return false;
+    }
+    std::vector<can_filter> filters;
+    for (const std::uint32_t id : config.receive_ids) {
+        filters.push_back(can_filter{id & CAN_SFF_MASK, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+    }
+    if (!config.receive_ids.empty() &&
+        setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
+                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
+        error = where + ": " + system_reason("setsockopt(CAN_RAW_FILTER)");
+        close();
+        return false;
+    }
+    const can_err_mask_t error_mask = config.receive_error_frames ? CAN_ERR_MASK : 0U;
+    const int on = 1;
+    if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &error_mask, sizeof(error_mask)) != 0 ||
+        setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof(on)) != 0 ||
+        setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on)) != 0) {
+        error = where + ": " + system_reason("setsockopt(error filter / SO_TIMESTAMP / SO_RXQ_OVFL)");
+        close();
+        return false;
+    }
+    if (config.receive_buffer_bytes > 0 &&
+        setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &config.receive_buffer_bytes,
+                   sizeof(config.receive_buffer_bytes)) != 0) {
+        error = where + ": " + system_reason("setsockopt(SO_RCVBUF)");
+        close();
+        return false;
+    }
+    sockaddr_can address{};
+    address.can_family = AF_CAN;
+    address.can_ifindex = static_cast<int>(index);
+    if (::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) != 0) {
+        error = where + ": " + system_reason("bind");
+        close();
+        return false;
+    }
+    return true;
+}
+
+CanStatus SocketCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {
+    if (!is_valid_can_frame(frame) || frame.error || socket_ < 0) {
+        ++counters_.send_failures;
+        return CanStatus::invalid;
+    }
+    const can_frame kernel = to_kernel(frame);
+    for (int attempt = 0; attempt < 2; ++attempt) {  // bound: one retry after waiting for room
+        const ssize_t written = ::write(socket_, &kernel, sizeof(kernel));
+        if (written == static_cast<ssize_t>(sizeof(kernel))) {
+            ++counters_.sent;
+            return CanStatus::ok;
+        }
+        if (written < 0 && (errno == ENETDOWN || errno == ENODEV)) {
+            ++counters_.send_failures;
+            return CanStatus::bus_off;
+        }
+        const bool queue_full = written < 0 && (errno == EAGAIN || errno == ENOBUFS || errno == EINTR);
+        if (!queue_full) {
+            ++counters_.send_failures;
+            ++counters_.backend_errors;
+            return CanStatus::failed;
+        }
+        if (attempt == 0 && (timeout_us == 0U || !wait_ready(socket_, POLLOUT, timeout_us))) {
+            break;
+        }
+    }
+    ++counters_.send_failures;
+    return CanStatus::timeout;
+}
+
+CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeout_us) {
+    if (socket_ < 0) {
+        return CanStatus::failed;
+    }
+    for (int attempt = 0; attempt < 2; ++attempt) {  // bound: one wait, then one more read
+        can_frame kernel{};
+        iovec vector{&kernel, sizeof(kernel)};
+        alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))]{};
+        msghdr message{};
+        message.msg_iov = &vector;
+        message.msg_iovlen = 1;
+        message.msg_control = control;
+        message.msg_controllen = sizeof(control);
+        const ssize_t length = ::recvmsg(socket_, &message, 0);
+        if (length == static_cast<ssize_t>(sizeof(kernel))) {
+            const std::uint64_t realtime_now = clock_us(CLOCK_REALTIME);
+            const std::uint64_t monotonic_now = clock_us(CLOCK_MONOTONIC);
+            std::uint64_t stamp_realtime = realtime_now;
+            for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
+                if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMP) {
+                    timeval stamp{};
+                    std::memcpy(&stamp, CMSG_DATA(c), sizeof(stamp));
+                    stamp_realtime = static_cast<std::uint64_t>(stamp.tv_sec) * 1000000U +
+                                     static_cast<std::uint64_t>(stamp.tv_usec);
+                } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+                    std::uint32_t dropped = 0;
+                    std::memcpy(&dropped, CMSG_DATA(c), sizeof(dropped));
+                    counters_.dropped = dropped;  // the kernel's running total for this socket
+                }
+            }
+            const std::uint64_t age_us = realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
+            received.frame = from_kernel(kernel);
+            received.timestamp_us = monotonic_now > age_us ? monotonic_now - age_us : 0U;
+            if (received.frame.error) {
+                ++counters_.error_frames;
+                if ((received.frame.id & kCanErrorBusOff) != 0U) {
+                    ++counters_.bus_off_events;
+                }
+            } else {
+                ++counters_.received;
+            }
+            return CanStatus::ok;
+        }
+        if (length >= 0 || (errno != EAGAIN && errno != EINTR)) {
+            ++counters_.backend_errors;  // a short read cannot happen on CAN_RAW; count it anyway
+            return CanStatus::failed;
+        }
+        if (attempt == 0 && (timeout_us == 0U || !wait_ready(socket_, POLLIN, timeout_us))) {
+            break;
+        }
+    }
+    return CanStatus::timeout;
+}
+
+}  // namespace scopekin::hal

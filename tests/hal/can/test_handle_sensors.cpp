@@ -1,0 +1,106 @@
+// The handle sensors' CAN driver (hal/drivers/handle_sensors): samples, freshness, staleness,
+// and every fault counted without touching the held sample.
+#include <cstdint>
+
+#include "hal/drivers/handle_sensors.hpp"
+#include "portable_check.hpp"
+#include "protocol/can/scopekin_messages.hpp"
+
+namespace {
+
+using scopekin::fixed_point::Q16_16;
+namespace protocol = scopekin::protocol;
+namespace drivers = scopekin::drivers;
+namespace kinetics = scopekin::kinetics;
+using scopekin::hal::ReceivedCanFrame;
+
+ReceivedCanFrame force_frame(std::int32_t force_N, std::uint8_t counter, std::uint64_t time_us,
+                             std::uint8_t status = 0) {
+    protocol::HandleForceTorque message{};
+    message.force_N = Q16_16::from_int(force_N);
+    message.counter = counter;
+    message.status = status;
+    return ReceivedCanFrame{protocol::encode(message), time_us};
+}
+
+ReceivedCanFrame insertion_frame(std::int32_t insertion_mm, std::uint8_t counter, std::uint64_t time_us) {
+    protocol::InsertionRoll message{};
+    message.insertion_mm = Q16_16::from_int(insertion_mm);
+    message.counter = counter;
+    return ReceivedCanFrame{protocol::encode(message), time_us};
+}
+
+}  // namespace
+
+SCOPEKIN_TEST(HandleSensors, ValidSamplesAreFreshOncePerPeriod) {
+    drivers::HandleSensors sensors{};
+    SCOPEKIN_EXPECT_TRUE(sensors.accept(force_frame(3, 0, 1000)));
+    SCOPEKIN_EXPECT_TRUE(sensors.accept(force_frame(4, 1, 2000)));
+    SCOPEKIN_EXPECT_TRUE(sensors.accept(insertion_frame(250, 7, 2000)));
+    kinetics::Inputs inputs = sensors.take_inputs(5000);
+    SCOPEKIN_EXPECT_EQ(inputs.fresh_mask, kinetics::kAllInputSignals);
+    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(4).raw());  // the latest
+    SCOPEKIN_EXPECT_EQ(inputs.insertion_mm.raw(), Q16_16::from_int(250).raw());
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    // Nothing new: the values are held, nothing is fresh, not yet stale (5 ms < 15 ms).
+    inputs = sensors.take_inputs(10000);
+    SCOPEKIN_EXPECT_EQ(inputs.fresh_mask, 0);
+    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(4).raw());
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().force_torque_samples, 2U);
+}
+
+SCOPEKIN_TEST(HandleSensors, StaleAfterTheTimeoutAndRecovers) {
+    drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000}};
+    // Never seen: stale from the start.
+    (void)sensors.take_inputs(1000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kForceTorqueStale | drivers::kInsertionRollStale);
+    (void)sensors.accept(force_frame(1, 0, 2000));
+    (void)sensors.accept(insertion_frame(100, 0, 2000));
+    (void)sensors.take_inputs(5000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    (void)sensors.accept(insertion_frame(101, 1, 6000));
+    (void)sensors.take_inputs(17000);  // force: 15 ms old, not beyond the timeout
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    (void)sensors.take_inputs(17001);  // 15.001 ms: stale; insertion (11 ms) not
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kForceTorqueStale);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().stale_events, 1U);  // never-seen is stale, not an event
+    (void)sensors.accept(force_frame(2, 9, 18000));  // counter jumped while stale: not a gap
+    const kinetics::Inputs inputs = sensors.take_inputs(20000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(2).raw());
+    SCOPEKIN_EXPECT_EQ(sensors.counters().counter_gaps, 0U);
+}
+
+SCOPEKIN_TEST(HandleSensors, FaultsAreCountedAndTheHeldSampleKept) {
+    drivers::HandleSensors sensors{};
+    (void)sensors.accept(force_frame(5, 0, 1000));
+    // Counter gap: 0 -> 3 means frames 1 and 2 were lost (2 counted); the sample is used.
+    (void)sensors.accept(force_frame(6, 3, 2000));
+    // Wrong length.
+    ReceivedCanFrame short_frame = force_frame(50, 4, 3000);
+    short_frame.frame.length = 4;
+    SCOPEKIN_EXPECT_TRUE(sensors.accept(short_frame));
+    // The cell reports overload: not valid.
+    (void)sensors.accept(force_frame(60, 4, 4000, 0x01));
+    // Not the driver's: another id, an error frame, an extended frame.
+    ReceivedCanFrame other = force_frame(70, 5, 4000);
+    other.frame.id = 0x123;
+    SCOPEKIN_EXPECT_TRUE(!sensors.accept(other));
+    ReceivedCanFrame extended = force_frame(70, 5, 4000);
+    extended.frame.extended = true;
+    SCOPEKIN_EXPECT_TRUE(!sensors.accept(extended));
+
+    const kinetics::Inputs inputs = sensors.take_inputs(5000);
+    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(6).raw());
+    SCOPEKIN_EXPECT_EQ(sensors.counters().counter_gaps, 2U);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().bad_length, 1U);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().sensor_status, 1U);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().force_torque_samples, 2U);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kCounterGap | drivers::kBadLength |
+                                             drivers::kSensorStatus | drivers::kInsertionRollStale);
+    // The flags belong to the period they happened in.
+    (void)sensors.accept(force_frame(7, 5, 6000));
+    (void)sensors.take_inputs(10000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kInsertionRollStale);
+}
