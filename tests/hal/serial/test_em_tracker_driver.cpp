@@ -10,6 +10,7 @@
 
 #include "em_tracker_sample_match.hpp"
 #include "em_tracker_stream.hpp"
+#include "em_tracker_test_bytes.hpp"
 #include "hal/drivers/em_tracker_driver.hpp"
 #include "hal/serial_port.hpp"
 #include "portable_check.hpp"
@@ -33,79 +34,66 @@ using scopekin::protocol::EmPoseMessage;
 using scopekin::protocol::TipForceMessage;
 using Bytes = std::span<const std::uint8_t>;
 namespace hal = scopekin::hal;
+using scopekin::test::kSpecPose;
+using scopekin::test::kSpecTipForce;
 using scopekin::test::pose_matches;
+using scopekin::test::spec_pose;
+using scopekin::test::spec_tip_force;
 using scopekin::test::thousandths_to_q16_raw;
 using scopekin::test::tip_force_matches;
 
-/// A scripted serial port: hands out queued bytes (at most `max_per_read` per read), then reports
-/// `when_empty`.  `lie` makes it claim more bytes than the buffer holds.
-class ScriptedSerialPort final : public SerialPort {
+/// What the test ports below share: reads hand out bytes of a stream, writes fail, no counters.
+class StreamSerialPort : public SerialPort {
 public:
-    SerialTransfer read(std::span<std::uint8_t> buffer, std::uint32_t) override {
-        ++reads;
-        if (lie) {
-            return {SerialStatus::ok, buffer.size() + 100U};
-        }
-        if (read_offset == size) {
-            return {when_empty, 0};
-        }
-        std::size_t count = size - read_offset;
-        count = count < buffer.size() ? count : buffer.size();
-        count = count < max_per_read ? count : max_per_read;
-        for (std::size_t i = 0; i < count; ++i) {
-            buffer[i] = bytes[read_offset + i];
-        }
-        read_offset += count;
-        return {SerialStatus::ok, count};
-    }
     SerialTransfer write(std::span<const std::uint8_t>, std::uint32_t) override {
         return {SerialStatus::failed, 0};
     }
     [[nodiscard]] std::uint32_t baud() const override { return 115200U; }
     [[nodiscard]] SerialCounters counters() const override { return {}; }
 
-    void add(Bytes more) {
-        for (const std::uint8_t byte : more) {
-            if (size < bytes.size()) {
-                bytes[size] = byte;
-                ++size;
-            }
+protected:
+    StreamSerialPort() = default;
+    ~StreamSerialPort() = default;
+    StreamSerialPort(const StreamSerialPort&) = default;
+    StreamSerialPort& operator=(const StreamSerialPort&) = default;
+
+    /// Copies the next bytes of `stream` from `offset` (at most `limit`, as many as fit in
+    /// `buffer`) and moves `offset` past them.
+    static SerialTransfer hand_out(Bytes stream, std::size_t& offset, std::span<std::uint8_t> buffer,
+                                   std::size_t limit) {
+        std::size_t count = stream.size() - offset;
+        count = count < buffer.size() ? count : buffer.size();
+        count = count < limit ? count : limit;
+        for (std::size_t i = 0; i < count; ++i) {
+            buffer[i] = stream[offset + i];
         }
+        offset += count;
+        return {SerialStatus::ok, count};
     }
-    void add_pose(const EmPoseMessage& message) {
-        std::array<std::uint8_t, 32> frame{};
-        add(Bytes{frame.data(), scopekin::protocol::encode_em_pose(message, frame)});
-    }
-    void add_tip_force(const TipForceMessage& message) {
-        std::array<std::uint8_t, 32> frame{};
-        add(Bytes{frame.data(), scopekin::protocol::encode_tip_force(message, frame)});
+};
+
+/// A scripted serial port: hands out queued bytes (at most `max_per_read` per read), then reports
+/// `when_empty`.  `lie` makes it claim more bytes than the buffer holds.
+class ScriptedSerialPort final : public StreamSerialPort {
+public:
+    SerialTransfer read(std::span<std::uint8_t> buffer, std::uint32_t) override {
+        ++reads;
+        if (lie) {
+            return {SerialStatus::ok, buffer.size() + 100U};
+        }
+        if (read_offset == input.size) {
+            return {when_empty, 0};
+        }
+        return hand_out(input.view(), read_offset, buffer, max_per_read);
     }
 
-    std::array<std::uint8_t, 8192> bytes{};
-    std::size_t size{0};
+    scopekin::test::EmTrackerTestBytes<8192> input;
     std::size_t read_offset{0};
     std::size_t max_per_read{std::numeric_limits<std::size_t>::max()};
     SerialStatus when_empty{SerialStatus::timeout};
     bool lie{false};
     std::uint32_t reads{0};
 };
-
-// em_tracker_serial.md §5.
-constexpr EmPoseMessage kSpecPose{1'000'000U, 0U, 0U, {12'345, -6'789, 250'000}, {11585, 0, 0, 11585}};
-constexpr TipForceMessage kSpecTipForce{1'000'250U, 0U, {-150, 40, 2'500}};
-
-EmPoseMessage pose(std::uint8_t sensor, std::uint32_t time_us) {
-    EmPoseMessage message = kSpecPose;
-    message.sensor_id = sensor;
-    message.device_time_us = time_us;
-    return message;
-}
-
-TipForceMessage tip_force(std::uint32_t time_us) {
-    TipForceMessage message = kSpecTipForce;
-    message.device_time_us = time_us;
-    return message;
-}
 
 // Static storage (the bare-metal stack is 32 KiB; a driver is about 4 KiB, a port 8 KiB).
 ScriptedSerialPort g_port;
@@ -122,7 +110,7 @@ void reset(const EmTrackerDriverConfig& config = {}) {
 
 SCOPEKIN_TEST(EmTrackerDriver, SpecPoseBecomesMillimetresAndUnitQuaternion) {
     reset();
-    g_port.add_pose(kSpecPose);
+    g_port.input.add_pose(kSpecPose);
     const auto result = g_driver.service(g_port, 5'000'000U);
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::ok);
     SCOPEKIN_EXPECT_EQ(result.bytes_read, 32U);
@@ -159,7 +147,7 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecPoseBecomesMillimetresAndUnitQuaternion) {
 
 SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
     reset();
-    g_port.add_tip_force(kSpecTipForce);
+    g_port.input.add_tip_force(kSpecTipForce);
     (void)g_driver.service(g_port, 7U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_TRUE(g_sample.kind == EmTrackerSampleKind::tip_force);
@@ -174,9 +162,9 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
     SCOPEKIN_EXPECT_TRUE(tip_force_matches(g_driver.latest_tip_force(), kSpecTipForce));
     SCOPEKIN_EXPECT_EQ(g_driver.counters().tip_forces_ok, 1U);
     // Extremes of the wire convert without saturating: ±32.767 N.
-    TipForceMessage extreme = tip_force(2'000'000U);
+    TipForceMessage extreme = spec_tip_force(2'000'000U);
     extreme.force_mN = {std::numeric_limits<std::int16_t>::min(), std::numeric_limits<std::int16_t>::max(), 0};
-    g_port.add_tip_force(extreme);
+    g_port.input.add_tip_force(extreme);
     (void)g_driver.service(g_port, 8U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.tip_force.force_N[0].raw(), thousandths_to_q16_raw(-32768));
@@ -186,8 +174,8 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
 
 SCOPEKIN_TEST(EmTrackerDriver, UnknownSensorIsFlaggedCountedAndTouchesNoSensor) {
     reset();
-    g_port.add_pose(pose(4U, 10U));
-    g_port.add_pose(pose(255U, 11U));
+    g_port.input.add_pose(spec_pose(4U, 10U));
+    g_port.input.add_pose(spec_pose(255U, 11U));
     (void)g_driver.service(g_port, 1U);
     for (int i = 0; i < 2; ++i) {
         SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
@@ -202,15 +190,15 @@ SCOPEKIN_TEST(EmTrackerDriver, UnknownSensorIsFlaggedCountedAndTouchesNoSensor) 
 
 SCOPEKIN_TEST(EmTrackerDriver, PositionRangeIsChecked) {
     reset();
-    EmPoseMessage edge = pose(1U, 100U);
+    EmPoseMessage edge = spec_pose(1U, 100U);
     edge.position_um = {1'000'000, -1'000'000, 0};  // exactly the limit: accepted
-    EmPoseMessage beyond = pose(1U, 200U);
+    EmPoseMessage beyond = spec_pose(1U, 200U);
     beyond.position_um = {0, 1'000'001, 0};
-    EmPoseMessage extreme = pose(1U, 300U);
+    EmPoseMessage extreme = spec_pose(1U, 300U);
     extreme.position_um = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max(), 0};
-    g_port.add_pose(edge);
-    g_port.add_pose(beyond);
-    g_port.add_pose(extreme);
+    g_port.input.add_pose(edge);
+    g_port.input.add_pose(beyond);
+    g_port.input.add_pose(extreme);
     (void)g_driver.service(g_port, 1U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, 0U);
@@ -240,9 +228,9 @@ SCOPEKIN_TEST(EmTrackerDriver, QuaternionMustBeUnit) {
     const std::uint32_t expected[] = {0U, 0U, hal::kEmFaultQuaternionNorm, hal::kEmFaultQuaternionNorm, 0U,
                                       hal::kEmFaultQuaternionNorm};
     for (std::size_t i = 0; i < quaternions.size(); ++i) {
-        EmPoseMessage message = pose(2U, static_cast<std::uint32_t>(100U + i));
+        EmPoseMessage message = spec_pose(2U, static_cast<std::uint32_t>(100U + i));
         message.orientation_q14 = quaternions[i];
-        g_port.add_pose(message);
+        g_port.input.add_pose(message);
     }
     (void)g_driver.service(g_port, 1U);
     for (std::size_t i = 0; i < quaternions.size(); ++i) {
@@ -264,13 +252,13 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceTimeMustIncreaseModuloTheWrap) {
     };
     const std::uint32_t expected[] = {0U, 0U, hal::kEmFaultTimestamp, hal::kEmFaultTimestamp, 0U};
     for (const std::uint32_t time : times) {
-        g_port.add_pose(pose(3U, time));
+        g_port.input.add_pose(spec_pose(3U, time));
     }
     // Sensors are independent: the tip's clock does not constrain the sigmoid's.
-    g_port.add_pose(pose(0U, 5U));
+    g_port.input.add_pose(spec_pose(0U, 5U));
     // The tip force has its own reference too.
-    g_port.add_tip_force(tip_force(50U));
-    g_port.add_tip_force(tip_force(40U));
+    g_port.input.add_tip_force(spec_tip_force(50U));
+    g_port.input.add_tip_force(spec_tip_force(40U));
     (void)g_driver.service(g_port, 1U);
     for (const std::uint32_t flags : expected) {
         SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
@@ -288,12 +276,12 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceTimeMustIncreaseModuloTheWrap) {
 
 SCOPEKIN_TEST(EmTrackerDriver, DeviceStatusIsFlagged) {
     reset();
-    EmPoseMessage out_of_box = pose(0U, 1U);
+    EmPoseMessage out_of_box = spec_pose(0U, 1U);
     out_of_box.status = scopekin::protocol::kEmStatusOutOfMotionBox;
-    TipForceMessage saturated = tip_force(1U);
+    TipForceMessage saturated = spec_tip_force(1U);
     saturated.status = scopekin::protocol::kTipForceStatusSaturated;
-    g_port.add_pose(out_of_box);
-    g_port.add_tip_force(saturated);
+    g_port.input.add_pose(out_of_box);
+    g_port.input.add_tip_force(saturated);
     (void)g_driver.service(g_port, 1U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{hal::kEmFaultDeviceStatus});
@@ -309,7 +297,7 @@ SCOPEKIN_TEST(EmTrackerDriver, StalenessAfterTimeoutAndRecovery) {
     EmTrackerDriverConfig config;
     config.stale_timeout_us = 100'000U;
     reset(config);
-    g_port.add_pose(pose(0U, 1U));
+    g_port.input.add_pose(spec_pose(0U, 1U));
     (void)g_driver.service(g_port, 1'000'000U);
     SCOPEKIN_EXPECT_TRUE(!g_driver.stale(EmSensor::tip));
     g_driver.poll(1'100'000U);  // exactly the timeout: still fresh
@@ -320,13 +308,13 @@ SCOPEKIN_TEST(EmTrackerDriver, StalenessAfterTimeoutAndRecovery) {
     g_driver.poll(1'200'000U);  // still stale: one event, not one per poll
     SCOPEKIN_EXPECT_EQ(g_driver.counters().stale_events, 1U);
     // A flagged sample does not bring it back ...
-    EmPoseMessage bad = pose(0U, 2U);
+    EmPoseMessage bad = spec_pose(0U, 2U);
     bad.position_um[0] = 2'000'000;
-    g_port.add_pose(bad);
+    g_port.input.add_pose(bad);
     (void)g_driver.service(g_port, 1'250'000U);
     SCOPEKIN_EXPECT_TRUE(g_driver.stale(EmSensor::tip));
     // ... a valid one does, at once.
-    g_port.add_pose(pose(0U, 3U));
+    g_port.input.add_pose(spec_pose(0U, 3U));
     (void)g_driver.service(g_port, 1'300'000U);
     SCOPEKIN_EXPECT_TRUE(!g_driver.stale(EmSensor::tip));
     SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::tip).receive_time_us, 1'300'000U);
@@ -358,7 +346,7 @@ SteppedClock g_clock;
 SCOPEKIN_TEST(EmTrackerDriver, ServiceWithTheHalClockStampsItsTime) {
     reset();
     g_clock.time_us = 42'000'000U;
-    g_port.add_pose(pose(2U, 1U));
+    g_port.input.add_pose(spec_pose(2U, 1U));
     (void)g_driver.service(g_port, g_clock);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.pose.receive_time_us, 42'000'000U);
@@ -372,9 +360,9 @@ SCOPEKIN_TEST(EmTrackerDriver, OnlyMonitoredSourcesGoStale) {
     config.monitored_sources = hal::kEmSourceTip | hal::kEmSourceTipForce;
     reset(config);
     SCOPEKIN_EXPECT_EQ(g_driver.stale_sources(), 0x11U);
-    g_port.add_pose(pose(0U, 1U));
-    g_port.add_pose(pose(2U, 1U));  // the handle sends although not monitored: accepted
-    g_port.add_tip_force(tip_force(1U));
+    g_port.input.add_pose(spec_pose(0U, 1U));
+    g_port.input.add_pose(spec_pose(2U, 1U));  // the handle sends although not monitored: accepted
+    g_port.input.add_tip_force(spec_tip_force(1U));
     (void)g_driver.service(g_port, 0U);
     SCOPEKIN_EXPECT_EQ(g_driver.stale_sources(), 0U);
     SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), 0U);
@@ -389,12 +377,12 @@ SCOPEKIN_TEST(EmTrackerDriver, LinkFaultsAreFlaggedUntilTaken) {
     std::array<std::uint8_t, 32> frame{};
     (void)scopekin::protocol::encode_em_pose(kSpecPose, frame);
     frame[20] = static_cast<std::uint8_t>(frame[20] ^ 0x10U);  // bad checksum
-    g_port.add(frame);
+    g_port.input.add(frame);
     const std::array<std::uint8_t, 4> bad_length{0xA5, 0x5A, 0x02, 0xFF};
     const std::array<std::uint8_t, 4> unknown_type{0xA5, 0x5A, 0x33, 0x00};
-    g_port.add(bad_length);
-    g_port.add(unknown_type);
-    g_port.add_pose(pose(0U, 1U));
+    g_port.input.add(bad_length);
+    g_port.input.add(unknown_type);
+    g_port.input.add_pose(spec_pose(0U, 1U));
     (void)g_driver.service(g_port, 0U);
     const std::uint32_t flags = g_driver.take_fault_flags();
     SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultBadChecksum) != 0U);
@@ -413,7 +401,7 @@ SCOPEKIN_TEST(EmTrackerDriver, LinkFaultsAreFlaggedUntilTaken) {
 
 SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
     reset();
-    g_port.add_pose(pose(0U, 1U));
+    g_port.input.add_pose(spec_pose(0U, 1U));
     g_port.when_empty = SerialStatus::closed;
     auto result = g_driver.service(g_port, 0U);
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::ok);  // a short read ends the call
@@ -437,7 +425,7 @@ SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
     // A full chunk followed by a hang-up: the bytes count, the hang-up too.
     reset();
     for (std::uint32_t i = 0; i < 2U; ++i) {
-        g_port.add_pose(pose(0U, 10U + i));  // 64 bytes: exactly one chunk
+        g_port.input.add_pose(spec_pose(0U, 10U + i));  // 64 bytes: exactly one chunk
     }
     g_port.when_empty = SerialStatus::closed;
     result = g_driver.service(g_port, 0U);
@@ -449,7 +437,7 @@ SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
 SCOPEKIN_TEST(EmTrackerDriver, ServiceReadsABoundedNumberOfBytes) {
     reset();
     for (std::uint32_t i = 0; i < 40U; ++i) {  // 40 poses = 1280 bytes waiting
-        g_port.add_pose(pose(static_cast<std::uint8_t>(i % 4U), 100U + i));
+        g_port.input.add_pose(spec_pose(static_cast<std::uint8_t>(i % 4U), 100U + i));
     }
     const auto first = g_driver.service(g_port, 0U);
     constexpr std::size_t per_call = EmTrackerDriver::kReadChunkBytes * EmTrackerDriver::kReadsPerService;
@@ -468,7 +456,7 @@ SCOPEKIN_TEST(EmTrackerDriver, ServiceReadsABoundedNumberOfBytes) {
 
     // A port that trickles 5 bytes per read stops the service call at its first short read.
     reset();
-    g_port.add_pose(pose(0U, 1U));
+    g_port.input.add_pose(spec_pose(0U, 1U));
     g_port.max_per_read = 5U;
     SCOPEKIN_EXPECT_EQ(g_driver.service(g_port, 0U).bytes_read, 5U);
 
@@ -484,7 +472,7 @@ SCOPEKIN_TEST(EmTrackerDriver, QueueOverflowDropsTheOldest) {
     static std::array<std::uint8_t, 40 * 32> stream{};
     std::size_t size = 0;
     for (std::uint32_t i = 0; i < 40U; ++i) {
-        size += scopekin::protocol::encode_em_pose(pose(1U, 1000U + i), std::span<std::uint8_t>{stream}.subspan(size));
+        size += scopekin::protocol::encode_em_pose(spec_pose(1U, 1000U + i), std::span<std::uint8_t>{stream}.subspan(size));
     }
     SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 40U);
     SCOPEKIN_EXPECT_EQ(g_driver.queued(), EmTrackerDriver::kSampleQueueCapacity);
@@ -505,27 +493,15 @@ std::array<std::uint8_t, kDriverStressEvents * 32> g_driver_stream{};
 std::array<scopekin::test::ExpectedEmMessage, kDriverStressEvents> g_driver_expected{};
 
 /// A port over a long stream that hands out random-sized pieces (1..80 bytes per read).
-class TricklingSerialPort final : public SerialPort {
+class TricklingSerialPort final : public StreamSerialPort {
 public:
     TricklingSerialPort(Bytes stream, std::uint32_t seed) : stream_(stream), prng_(seed) {}
     SerialTransfer read(std::span<std::uint8_t> buffer, std::uint32_t) override {
         if (offset_ == stream_.size()) {
             return {SerialStatus::timeout, 0};
         }
-        std::size_t count = 1U + prng_.below(80U);
-        count = count < buffer.size() ? count : buffer.size();
-        count = count < stream_.size() - offset_ ? count : stream_.size() - offset_;
-        for (std::size_t i = 0; i < count; ++i) {
-            buffer[i] = stream_[offset_ + i];
-        }
-        offset_ += count;
-        return {SerialStatus::ok, count};
+        return hand_out(stream_, offset_, buffer, 1U + prng_.below(80U));
     }
-    SerialTransfer write(std::span<const std::uint8_t>, std::uint32_t) override {
-        return {SerialStatus::failed, 0};
-    }
-    [[nodiscard]] std::uint32_t baud() const override { return 115200U; }
-    [[nodiscard]] SerialCounters counters() const override { return {}; }
     [[nodiscard]] bool done() const { return offset_ == stream_.size(); }
 
 private:

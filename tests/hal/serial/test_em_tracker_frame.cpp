@@ -9,6 +9,7 @@
 #include <span>
 
 #include "em_tracker_stream.hpp"
+#include "em_tracker_test_bytes.hpp"
 #include "portable_check.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
 
@@ -28,20 +29,21 @@ using scopekin::protocol::encode_tip_force;
 using scopekin::protocol::kEmTrackerFramerCapacity;
 using scopekin::protocol::kEmTrackerMaxFrameSize;
 using scopekin::protocol::TipForceMessage;
+using scopekin::test::kSpecPose;
+using scopekin::test::kSpecTipForce;
+using scopekin::test::spec_pose;
 using Bytes = std::span<const std::uint8_t>;
 
 // CRC-16/CCITT-FALSE check value.
 constexpr std::array<std::uint8_t, 9> kCheckInput{'1', '2', '3', '4', '5', '6', '7', '8', '9'};
 static_assert(em_tracker_crc16(Bytes{kCheckInput}) == 0x29B1U);
 
-// em_tracker_serial.md §5, copied from the document.
+// em_tracker_serial.md §5, copied from the document (the messages: em_tracker_test_bytes.hpp).
 constexpr std::array<std::uint8_t, 32> kSpecPoseFrame{
     0xA5, 0x5A, 0x01, 0x1A, 0x40, 0x42, 0x0F, 0x00, 0x00, 0x00, 0x39, 0x30, 0x00, 0x00, 0x7B, 0xE5,
     0xFF, 0xFF, 0x90, 0xD0, 0x03, 0x00, 0x41, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x41, 0x2D, 0xCB, 0x4B};
-constexpr EmPoseMessage kSpecPose{1'000'000U, 0U, 0U, {12'345, -6'789, 250'000}, {11585, 0, 0, 11585}};
 constexpr std::array<std::uint8_t, 17> kSpecTipForceFrame{
     0xA5, 0x5A, 0x02, 0x0B, 0x3A, 0x43, 0x0F, 0x00, 0x00, 0x6A, 0xFF, 0x28, 0x00, 0xC4, 0x09, 0x87, 0x60};
-constexpr TipForceMessage kSpecTipForce{1'000'250U, 0U, {-150, 40, 2'500}};
 static_assert(em_tracker_crc16(Bytes{kSpecPoseFrame}.subspan(2, 28)) == 0x4BCBU);
 static_assert(em_tracker_crc16(Bytes{kSpecTipForceFrame}.subspan(2, 13)) == 0x6087U);
 
@@ -84,6 +86,15 @@ bool bytes_accounted(const EmTrackerFramer& framer, std::size_t accepted, const 
     return accepted == log.frame_bytes + framer.counters().bytes_discarded + framer.buffered();
 }
 
+/// `bytes` starts with `prefix`, byte for byte.
+bool begins_with(Bytes bytes, Bytes prefix) {
+    bool same = bytes.size() >= prefix.size();
+    for (std::size_t i = 0; same && i < prefix.size(); ++i) {
+        same = bytes[i] == prefix[i];
+    }
+    return same;
+}
+
 bool same_pose(const EmTrackerFrame& frame, const EmPoseMessage& expected) {
     EmPoseMessage decoded;
     return decode_em_pose(frame, decoded) && decoded == expected;
@@ -101,33 +112,7 @@ bool counters_equal(const EmTrackerFramerCounters& a, const EmTrackerFramerCount
 }
 
 /// A little stream builder over static storage.
-struct Stream {
-    std::array<std::uint8_t, 1024> bytes{};
-    std::size_t size{0};
-    void add(Bytes more) {
-        for (const std::uint8_t byte : more) {
-            if (size < bytes.size()) {
-                bytes[size] = byte;
-                ++size;
-            }
-        }
-    }
-    void add_pose(const EmPoseMessage& message) {
-        std::array<std::uint8_t, 32> frame{};
-        add(Bytes{frame.data(), encode_em_pose(message, frame)});
-    }
-    void add_tip_force(const TipForceMessage& message) {
-        std::array<std::uint8_t, 32> frame{};
-        add(Bytes{frame.data(), encode_tip_force(message, frame)});
-    }
-    [[nodiscard]] Bytes view() const { return Bytes{bytes.data(), size}; }
-};
-
-EmPoseMessage pose_with_time(std::uint32_t time_us) {
-    EmPoseMessage message = kSpecPose;
-    message.device_time_us = time_us;
-    return message;
-}
+using Stream = scopekin::test::EmTrackerTestBytes<1024>;
 
 // Static storage of the tests below (the bare-metal stack is 32 KiB).
 FrameLog g_log;
@@ -153,11 +138,7 @@ SCOPEKIN_TEST(EmTrackerFrame, SpecPoseExampleIsByteExact) {
     std::array<std::uint8_t, 40> out{};
     const std::size_t size = encode_em_pose(kSpecPose, out);
     SCOPEKIN_EXPECT_EQ(size, kSpecPoseFrame.size());
-    bool same = true;
-    for (std::size_t i = 0; i < kSpecPoseFrame.size(); ++i) {
-        same = same && out[i] == kSpecPoseFrame[i];
-    }
-    SCOPEKIN_EXPECT_TRUE(same);
+    SCOPEKIN_EXPECT_TRUE(begins_with(out, kSpecPoseFrame));
 
     reset();
     feed(g_framer, Bytes{kSpecPoseFrame}, kSpecPoseFrame.size(), g_log);
@@ -170,11 +151,7 @@ SCOPEKIN_TEST(EmTrackerFrame, SpecTipForceExampleIsByteExact) {
     std::array<std::uint8_t, 40> out{};
     const std::size_t size = encode_tip_force(kSpecTipForce, out);
     SCOPEKIN_EXPECT_EQ(size, kSpecTipForceFrame.size());
-    bool same = true;
-    for (std::size_t i = 0; i < kSpecTipForceFrame.size(); ++i) {
-        same = same && out[i] == kSpecTipForceFrame[i];
-    }
-    SCOPEKIN_EXPECT_TRUE(same);
+    SCOPEKIN_EXPECT_TRUE(begins_with(out, kSpecTipForceFrame));
 
     reset();
     feed(g_framer, Bytes{kSpecTipForceFrame}, 1, g_log);
@@ -235,15 +212,15 @@ SCOPEKIN_TEST(EmTrackerFramer, ResynchronisesAfterGarbage) {
     reset();
     const std::array<std::uint8_t, 10> garbage{0x00, 0xA5, 0xA5, 0x11, 0x5A, 0xA5, 0x5A, 0xFF, 0xA5, 0x13};
     g_stream.add(garbage);
-    g_stream.add_pose(pose_with_time(1));
+    g_stream.add_pose(spec_pose(0U, 1));
     g_stream.add(garbage);
     g_stream.add_tip_force(kSpecTipForce);
-    g_stream.add_pose(pose_with_time(2));
+    g_stream.add_pose(spec_pose(0U, 2));
     const std::size_t accepted = feed(g_framer, g_stream.view(), g_stream.size, g_log);
     SCOPEKIN_EXPECT_EQ(g_log.count, 3U);
-    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], pose_with_time(1)));
+    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], spec_pose(0U, 1)));
     SCOPEKIN_EXPECT_TRUE(same_tip_force(g_log.frames[1], kSpecTipForce));
-    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[2], pose_with_time(2)));
+    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[2], spec_pose(0U, 2)));
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bytes_discarded, 20U);  // exactly the garbage
     SCOPEKIN_EXPECT_EQ(g_framer.counters().unknown_type, 2U);      // A5 5A FF, twice
     SCOPEKIN_EXPECT_EQ(g_framer.buffered(), 0U);
@@ -276,14 +253,14 @@ SCOPEKIN_TEST(EmTrackerFramer, CorruptedChecksumImmediatelyFollowedByAValidFrame
     std::array<std::uint8_t, 32> bad = kSpecPoseFrame;
     bad[31] = static_cast<std::uint8_t>(bad[31] ^ 0x01U);  // CRC high byte
     g_stream.add(bad);
-    g_stream.add_pose(pose_with_time(7));
+    g_stream.add_pose(spec_pose(0U, 7));
     std::array<std::uint8_t, 17> bad_force = kSpecTipForceFrame;
     bad_force[9] = static_cast<std::uint8_t>(bad_force[9] ^ 0x80U);  // payload
     g_stream.add(bad_force);
     g_stream.add_tip_force(kSpecTipForce);
     const std::size_t accepted = feed(g_framer, g_stream.view(), 5, g_log);
     SCOPEKIN_EXPECT_EQ(g_log.count, 2U);
-    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], pose_with_time(7)));
+    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], spec_pose(0U, 7)));
     SCOPEKIN_EXPECT_TRUE(same_tip_force(g_log.frames[1], kSpecTipForce));
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bad_checksum, 2U);
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bytes_discarded, 32U + 17U);
@@ -304,11 +281,11 @@ SCOPEKIN_TEST(EmTrackerFramer, ValidFrameStartingInsideACorruptedFrameIsFound) {
     g_stream.add(carrier);
     // A truncated pose (the line lost its tail) directly followed by a valid pose.
     g_stream.add(Bytes{kSpecPoseFrame}.first(20));
-    g_stream.add_pose(pose_with_time(9));
+    g_stream.add_pose(spec_pose(0U, 9));
     const std::size_t accepted = feed(g_framer, g_stream.view(), 3, g_log);
     SCOPEKIN_EXPECT_EQ(g_log.count, 2U);
     SCOPEKIN_EXPECT_TRUE(same_tip_force(g_log.frames[0], kSpecTipForce));
-    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[1], pose_with_time(9)));
+    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[1], spec_pose(0U, 9)));
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bad_checksum, 2U);  // the carrier, the truncated pose
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bytes_discarded, (32U - 17U) + 20U);
     SCOPEKIN_EXPECT_TRUE(bytes_accounted(g_framer, accepted, g_log));
@@ -319,13 +296,13 @@ SCOPEKIN_TEST(EmTrackerFramer, FakeSyncWithHugeLengthDoesNotSwallowTheFramesAfte
     const std::array<std::uint8_t, 4> fake_pose{0xA5, 0x5A, 0x01, 0xFF};
     const std::array<std::uint8_t, 4> fake_force{0xA5, 0x5A, 0x02, 0xC8};
     g_stream.add(fake_pose);
-    g_stream.add_pose(pose_with_time(1));
+    g_stream.add_pose(spec_pose(0U, 1));
     g_stream.add(fake_force);
     g_stream.add_tip_force(kSpecTipForce);
     // Fed in one go: the frames come out at once, nothing waits for 255 bytes.
     const std::size_t accepted = feed(g_framer, g_stream.view(), g_stream.size, g_log);
     SCOPEKIN_EXPECT_EQ(g_log.count, 2U);
-    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], pose_with_time(1)));
+    SCOPEKIN_EXPECT_TRUE(same_pose(g_log.frames[0], spec_pose(0U, 1)));
     SCOPEKIN_EXPECT_TRUE(same_tip_force(g_log.frames[1], kSpecTipForce));
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bad_length, 2U);
     SCOPEKIN_EXPECT_EQ(g_framer.counters().bytes_discarded, 8U);

@@ -121,6 +121,18 @@ private:
 
 std::string message(const std::array<char, 256>& error) { return std::string(error.data()); }
 
+/// Opens `port` on the slave side of `master` at 115200 baud (raw mode); says why not.
+::testing::AssertionResult open_on_pty(const PtyMaster& master, PosixSerialPort& port) {
+    if (!master.ok()) {
+        return ::testing::AssertionFailure() << master.error();
+    }
+    std::array<char, 256> error{};
+    if (!port.open(master.slave_path(), 115200U, error)) {
+        return ::testing::AssertionFailure() << message(error);
+    }
+    return ::testing::AssertionSuccess();
+}
+
 }  // namespace
 
 TEST(PosixSerialPort, OpenNamesTheDeviceAndTheCause) {
@@ -170,10 +182,8 @@ TEST(PosixSerialPort, UnsupportedBaudRateIsAClearError) {
 
 TEST(PosixSerialPort, RawModePassesEveryByteValueBothWays) {
     PtyMaster master;
-    ASSERT_TRUE(master.ok()) << master.error();
     PosixSerialPort port;
-    std::array<char, 256> error{};
-    ASSERT_TRUE(port.open(master.slave_path(), 115200U, error)) << message(error);
+    ASSERT_TRUE(open_on_pty(master, port));
 
     std::array<std::uint8_t, 256> all{};
     for (std::size_t i = 0; i < all.size(); ++i) {
@@ -208,10 +218,8 @@ TEST(PosixSerialPort, RawModePassesEveryByteValueBothWays) {
 
 TEST(PosixSerialPort, ReadTimesOutWhenNothingComesAndReportsClosedAfterHangUp) {
     PtyMaster master;
-    ASSERT_TRUE(master.ok()) << master.error();
     PosixSerialPort port;
-    std::array<char, 256> error{};
-    ASSERT_TRUE(port.open(master.slave_path(), 115200U, error)) << message(error);
+    ASSERT_TRUE(open_on_pty(master, port));
     std::array<std::uint8_t, 16> buffer{};
 
     EXPECT_EQ(port.read(buffer, 0U).status, SerialStatus::timeout);
@@ -254,11 +262,9 @@ TEST(EmTrackerOverPty, DriverOutputMatchesTheValidFramesExactly) {
     ASSERT_GT(expected_count, kEvents / 2U);
 
     PtyMaster master;
-    ASSERT_TRUE(master.ok()) << master.error();
     PosixSerialPort port;
-    std::array<char, 256> error{};
     // Raw mode is set before the first byte is written (a cooked line would mangle CR, ^C, ...).
-    ASSERT_TRUE(port.open(master.slave_path(), 115200U, error)) << message(error);
+    ASSERT_TRUE(open_on_pty(master, port));
 
     std::atomic<bool> stop{false};
     std::atomic<bool> writer_done{false};
