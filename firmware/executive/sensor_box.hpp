@@ -21,6 +21,8 @@
 // last value and sets its own stale flag in every period without a fresh sample, so the next
 // BoxStatus (sent at once because the bits changed) reports it, and KineticEstimate.InputsStale
 // marks the held estimate.  When samples return, the flags clear the same way.
+// The driver fault bits of a period are taken after `step`, before `publish`: a send that fails
+// is reported (kFaultSendFailed) from the next period on.
 #pragma once
 
 #include <cstdint>
