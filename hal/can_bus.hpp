@@ -2,7 +2,8 @@
 // identifiers, send with a timeout, receive with a timestamp, counters.
 //
 // Backends: hal/socketcan (Linux CAN_RAW), hal/loopback (in memory, simulated time),
-// hal/bare_metal (Cortex-M, polled mailbox stub).  The firmware's cyclic executive holds a
+// on bare metal too (mps2-an386 has no CAN controller, so the loopback wire stands in for one).
+// The firmware's cyclic executive holds a
 // CanBus& and never knows which one it has; `main` chooses.
 //
 // Timeouts are in microseconds; 0 means "poll: do not wait".
@@ -81,6 +82,18 @@ protected:
     CanBus(const CanBus&) = default;
     CanBus& operator=(const CanBus&) = default;
 };
+
+/// Counts one received frame in `counters` (backends share this bookkeeping).
+constexpr void count_received_frame(CanCounters& counters, const CanFrame& frame) {
+    if (frame.error) {
+        ++counters.error_frames;
+        if ((frame.id & kCanErrorBusOff) != 0U) {
+            ++counters.bus_off_events;
+        }
+    } else {
+        ++counters.received;
+    }
+}
 
 /// True if `frame` is something a classic CAN controller can send (length, id range).
 [[nodiscard]] constexpr bool is_valid_can_frame(const CanFrame& frame) {

@@ -40,14 +40,7 @@ CanStatus LoopbackCanEndpoint::receive(ReceivedCanFrame& received, std::uint32_t
     received = incoming_->frames[incoming_->head];
     incoming_->head = (incoming_->head + 1U) % kLoopbackCanCapacity;
     --incoming_->count;
-    if (received.frame.error) {
-        ++counters_.error_frames;
-        if ((received.frame.id & kCanErrorBusOff) != 0U) {
-            ++counters_.bus_off_events;
-        }
-    } else {
-        ++counters_.received;
-    }
+    count_received_frame(counters_, received.frame);
     return CanStatus::ok;
 }
 

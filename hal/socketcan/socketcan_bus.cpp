@@ -210,14 +210,7 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
             const std::uint64_t age_us = realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
             received.frame = from_kernel(kernel);
             received.timestamp_us = monotonic_now > age_us ? monotonic_now - age_us : 0U;
-            if (received.frame.error) {
-                ++counters_.error_frames;
-                if ((received.frame.id & kCanErrorBusOff) != 0U) {
-                    ++counters_.bus_off_events;
-                }
-            } else {
-                ++counters_.received;
-            }
+            count_received_frame(counters_, received.frame);
             return CanStatus::ok;
         }
         if (length >= 0 || (errno != EAGAIN && errno != EINTR)) {

@@ -1,7 +1,7 @@
 // box_main.cpp — `main` of the sensor box on a Cortex-M4 (QEMU mps2-an386): the same cyclic
 // executive as scopekin-box, on the bare-metal backends: SysTick clock, CMSDK UART0 for the
-// test-bench serial sensors, and — the board has no CAN controller — the loopback wire as a stub
-// CAN controller.  The stub's far end is played here by a handle-sensor simulator (1 kHz, a
+// test-bench serial sensors, and — the board has no CAN controller — the loopback wire in its
+// place.  The wire's far end is played here by a handle-sensor simulator (1 kHz, a
 // 50 mm/s advance), so the image is a self-contained demonstration and test: it runs
 // kDemoPeriods periods in real (SysTick) time, decodes everything the box published, and exits
 // through semihosting with status 0 only if every period published its frames, the estimate
