@@ -13,7 +13,7 @@ PACKAGES=(
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   qemu-user qemu-system-arm
-  python3 python3-canmatrix
+  python3 python3-canmatrix python3-matplotlib
   clang-14 libclang-rt-14-dev
   qemu-system-x86 busybox-static can-utils cpio xz-utils
 )
@@ -26,9 +26,9 @@ Usage: ./scopekin.sh <command> [args]
 
 Commands:
   main [args...]      Install missing Debian packages, configure and build the 'host' preset,
-                      then run: build/host/host_sim/scopekin verify [args...]
-                      and the bundled default procedure:
-                        scopekin simulate model/scenarios/default_insertion.json --out build/main_run
+                      then run the main job, a simulated colonoscopy through the firmware:
+                        build/host/host_sim/scopekin demo --out build/demo [args...]
+                      (args go to 'scopekin demo'; an --out of your own replaces build/demo)
   test [preset...]    Install missing Debian packages, then for each preset (default: all of
                       ${ALL_PRESETS[*]}) configure, build (-j${BUILD_JOBS}) and run ctest.
                       Ends with one CTest-style line summed over all presets, e.g.
@@ -72,12 +72,13 @@ cmd_main() {
     echo "scopekin.sh: $cli was not built" >&2
     exit 1
   fi
-  local status=0
-  "$cli" verify "$@" || status=$?
-  echo
-  echo "Default procedure: model/scenarios/default_insertion.json -> build/main_run/"
-  "$cli" simulate model/scenarios/default_insertion.json --out build/main_run || status=$?
-  exit "$status"
+  local out=(--out build/demo) arg
+  for arg in "$@"; do
+    if [[ "$arg" == --out || "$arg" == --out=* ]]; then
+      out=()
+    fi
+  done
+  exec "$cli" demo "${out[@]}" "$@"
 }
 
 cmd_test() {

@@ -66,7 +66,7 @@ void RecordingCanBus::record(const CanFrame& frame, std::uint64_t monotonic_us) 
 CanStatus RecordingCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {
     const CanStatus status = bus_->send(frame, timeout_us);
     if (status == CanStatus::ok) {
-        record(frame, clock_->now_us());
+        record(frame, has_send_time_ ? send_time_us_ : clock_->now_us());
     }
     return status;
 }

@@ -4,6 +4,10 @@
 //
 // Timestamps are wall-clock (CLOCK_REALTIME) microseconds, as candump writes them: a received
 // frame's monotonic timestamp is converted with the realtime-monotonic offset read at open().
+// A sent frame carries the time given to set_send_time_us() — main passes each period's release
+// time, the `now` the box ran that period at — so `scopekin replay` can run every period at the
+// time, and on the frames, the box did (the received frames of a period are the lines before its
+// first sent frame). Without it a sent frame carries the clock at send().
 // The file is flushed once a second and at close(); a write error is counted, reported by
 // write_errors(), and recording goes on (the box's work does not stop for its log).
 #pragma once
@@ -31,6 +35,8 @@ public:
     bool close();
 
     CanStatus send(const CanFrame& frame, std::uint32_t timeout_us) override;
+    /// Sent frames from now on carry this monotonic time (the period's release time).
+    void set_send_time_us(std::uint64_t monotonic_us) { send_time_us_ = monotonic_us; has_send_time_ = true; }
     CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) override;
     [[nodiscard]] CanCounters counters() const override { return bus_->counters(); }
 
@@ -48,6 +54,8 @@ private:
     std::uint64_t last_flush_us_{0};
     std::uint64_t lines_{0};
     std::uint64_t write_errors_{0};
+    std::uint64_t send_time_us_{0};
+    bool has_send_time_{false};
 };
 
 }  // namespace scopekin::hal

@@ -5,19 +5,27 @@
 #include <exception>
 #include <iostream>
 
+#include "host_sim/cli/batch_command.hpp"
+#include "host_sim/cli/demo_command.hpp"
+#include "host_sim/cli/replay_command.hpp"
+#include "host_sim/cli/run_command.hpp"
 #include "host_sim/cli/simulate_command.hpp"
 #include "host_sim/cli/static_command.hpp"
 #include "host_sim/cli/verify_command.hpp"
 #include "model/model_error.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"scopekin - colonoscope kinetics: reference beam model, verification (and, later, the simulated "
-               "sensor box)"};
+  CLI::App app{"scopekin - colonoscope kinetics: the reference model, its verification, and the host simulator that runs the "
+               "sensor box's unmodified firmware on simulated or recorded data"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "scopekin 0.1.0");
   scopekin::cli::add_verify_command(app);
   scopekin::cli::add_static_command(app);
   scopekin::cli::add_simulate_command(app);
+  scopekin::cli::add_run_command(app);
+  scopekin::cli::add_replay_command(app);
+  scopekin::cli::add_demo_command(app);
+  scopekin::cli::add_batch_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::RuntimeError& status) {

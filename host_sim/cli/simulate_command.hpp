@@ -1,9 +1,23 @@
 #pragma once
-// `scopekin simulate SCENARIO.json --out DIR`: runs a scenario file (README "Scenario files") and
-// writes DIR/recording.csv and DIR/summary.json (a free beam scenario: its static solution).
+// `scopekin simulate SCENARIO.json --out DIR`: runs a scenario file (README "Scenario files"): a
+// world scenario live through the sensors and the firmware (recording.csv, world.csv,
+// firmware.csv, snapshots.json, summary.json), a free beam scenario statically.
 #include <CLI/CLI.hpp>
+#include <cstdint>
+#include <string>
 
 namespace scopekin::cli {
+
+struct SimulateOptions {
+  std::string scenario;
+  std::string out;
+  std::uint64_t seed = 1;
+  bool quiet = false;
+};
+
+/// The command's work; returns its exit status (also used by `batch`). Throws ModelError for an
+/// invalid scenario.
+int run_simulate(const SimulateOptions& options);
 
 void add_simulate_command(CLI::App& app);
 

@@ -6,6 +6,8 @@
 
 #include "model/colon/bundled_colons.hpp"
 #include "model/colon/colon_beam.hpp"
+#include "model/effects/effect_library.hpp"
+#include "model/scenario/tip_steering.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
 #include "model/scope/cf_q160l.hpp"
@@ -263,7 +265,7 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
 
   sc.kind = ScenarioKind::world;
   root.allow_only({"description", "colon", "colon_regions", "scope", "gravity_mm_per_s2", "initial_insertion_mm",
-                   "solver", "procedure", "outputs"});
+                   "solver", "procedure", "outputs", "truth_effects", "sensors", "steering"});
   sc.scope = read_scope(root.object("scope"), sc.scope_model);
   sc.colon = read_colon(root.object("colon"), sc.scope.radius_mm);
 
@@ -327,6 +329,34 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
   sc.procedure = Procedure(std::move(actions), procedure_path);
   sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
 
+  if (root.has("truth_effects")) sc.effects = read_world_effects(root.array("truth_effects"), root.field("truth_effects"));
+  if (root.has("sensors")) {
+    (void)root.object("sensors");  // an object; its keys are read by the host simulator's sensor models
+    sc.sensors = root.raw("sensors");
+    sc.sensors_path = root.field("sensors");
+  }
+  if (root.has("steering")) {
+    const nlohmann::json& windows = root.array("steering");
+    const std::string path = root.field("steering");
+    for (std::size_t i = 0; i < windows.size(); ++i) {
+      const JsonObject w(windows[i], item(path, i));
+      w.allow_only({"start_s", "end_s", "lookahead_mm", "bending_section_mm", "gain"});
+      SteeringWindow window;
+      window.start_s = w.number("start_s");
+      window.end_s = w.number("end_s");
+      window.lookahead_mm = positive_or(w, "lookahead_mm", window.lookahead_mm);
+      window.bending_section_mm = positive_or(w, "bending_section_mm", window.bending_section_mm);
+      window.gain = positive_or(w, "gain", window.gain);
+      require_non_negative(window.start_s, w.field("start_s"));
+      if (!(window.end_s > window.start_s))
+        throw ModelError(w.field("end_s") + ": " + number_text(window.end_s) + " s must be later than start_s");
+      if (window.gain > 1.0) throw ModelError(w.field("gain") + ": " + number_text(window.gain) + " must be in (0, 1]");
+      sc.steering.push_back(window);
+    }
+    const double element_mm = sc.scope.length_mm / static_cast<double>(sc.scope.elements);
+    sc.effects.push_back(std::make_shared<TipSteering>(sc.steering, *sc.colon,
+                                                       sc.scope.section.bending_stiffness_z_Nmm2, element_mm));
+  }
   if (root.has("outputs")) sc.outputs = read_outputs(root.object("outputs"), sc.scope.length_mm, sc.scope.elements, sc.settings.time_step_s);
   return sc;
 }

@@ -8,6 +8,7 @@
 // Read strictly: unknown keys, wrong types and unphysical values are rejected with the field's
 // full path (ModelError).
 #include <array>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 #include "model/colon/colon_tube.hpp"
 #include "model/io/beam_problem.hpp"
 #include "model/scenario/procedure.hpp"
+#include "model/scenario/tip_steering.hpp"
 #include "model/world/world.hpp"
 
 namespace scopekin::model {
@@ -42,6 +44,15 @@ struct Scenario {
   WorldSettings settings;
   Procedure procedure;
   ScenarioOutputs outputs;
+  /// "truth_effects": physical effects the firmware's model lacks (model/effects/EFFECTS.md),
+  /// passed to the World by build_world. Empty = none.
+  std::vector<std::shared_ptr<const WorldEffect>> effects;
+  /// "steering": when the physician steers the tip down the lumen (model/scenario/tip_steering.hpp);
+  /// added to `effects` as a TipSteering.
+  std::vector<SteeringWindow> steering;
+  /// "sensors": the host simulator's sensor models (host_sim/sensors/SENSORS.md), read there.
+  nlohmann::json sensors = nlohmann::json::object();
+  std::string sensors_path = "sensors";
 
   // Free beam scenario.
   std::optional<io::BeamProblem> beam_problem;

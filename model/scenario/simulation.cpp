@@ -20,7 +20,8 @@ std::unique_ptr<World> build_world(const Scenario& scenario) {
   if (scenario.kind != ScenarioKind::world || !scenario.colon)
     throw ModelError(scenario.source + ": not a world scenario (no colon)");
   try {
-    return std::make_unique<World>(scenario.scope, *scenario.colon, scenario.colon_properties, scenario.settings);
+    return std::make_unique<World>(scenario.scope, *scenario.colon, scenario.colon_properties, scenario.settings,
+                                   scenario.effects);
   } catch (const ModelError& e) {
     throw ModelError(scenario.source + ": " + e.what());
   }
@@ -145,6 +146,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, const S
       break;
     }
 
+    if (callbacks.on_step) callbacks.on_step(world, report);
     maybe_sample(&report);
     if (callbacks.on_progress) callbacks.on_progress({world.time_s(), end, loaded, world.handle_force_N()});
   }

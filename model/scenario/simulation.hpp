@@ -77,6 +77,9 @@ struct SimulationCallbacks {
   std::function<void(const SimulationSample&, const World&)> on_sample;
   /// Called after every step.
   std::function<void(const SimulationProgress&)> on_progress;
+  /// Called after every successful step with the world (before on_sample / on_progress); the
+  /// host simulator runs its sensors and the firmware here.
+  std::function<void(const World&, const WorldStepReport&)> on_step;
 };
 
 /// Builds the world of a world scenario. Throws ModelError (naming the scenario file) if the

@@ -83,7 +83,7 @@ World::World(const ScopeSpec& scope, const ColonTube& colon, const std::array<Co
   compliance_ = std::make_unique<ColonCompliance>(build_colon_structure(tube_, colon_properties));
 
   std::vector<BeamSection> sections(scope.elements, scope.section);
-  for (const auto& e : effects_) e->adjust_scope_sections(sections);
+  for (const auto& e : effects_) e->adjust_scope_sections(sections, scope.length_mm);
   if (sections.size() != scope.elements) throw ModelError("a truth effect changed the number of scope sections");
   std::vector<Eigen::Vector3d> nodes;
   const double start = settings_.initial_insertion_mm - scope.length_mm;
@@ -137,11 +137,11 @@ double World::scope_energy_Nmm() const {
   return 0.5 * velocity_.dot(mass.multiply(velocity_)) + scope_.strain_energy_Nmm() + potential;
 }
 
-double World::friction_at(double arc_from_tip, ColonRegion region) const {
+double World::friction_at(double arc_from_tip, ColonRegion region, double sliding_speed_mm_per_s) const {
   double mu = settings_.contact.friction_coefficient;
   for (const FrictionZone& z : settings_.contact.friction_zones)
     if (arc_from_tip >= z.from_tip_mm && arc_from_tip < z.to_tip_mm) mu = z.coefficient;
-  for (const auto& e : effects_) mu = e->friction_coefficient(arc_from_tip, region, mu);
+  for (const auto& e : effects_) mu = e->friction_coefficient(ContactFrictionView{arc_from_tip, region, mu, sliding_speed_mm_per_s});
   return std::max(0.0, mu);
 }
 
@@ -213,10 +213,16 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
   if (!effects_.empty()) {
     WorldEffectView view;
     view.time_s = time_s_ + h;
+    view.time_step_s = h;
     view.insertion_depth_mm = insertion_depth_mm();
+    view.scope_radius_mm = scope_radius_mm_;
+    view.colon_at_rest = &body_tube_;
+    view.scope_node_held = held;
     for (std::size_t k = 0; k < nodes; ++k) {
       view.scope_nodes_mm.push_back(node_position_mm(k));
       view.arc_from_tip_mm.push_back(arc_from_tip_mm(k));
+      view.scope_velocities_mm_per_s.push_back(node_velocity_mm_per_s(k));
+      view.scope_axes.push_back(node_axis(k));
     }
     std::vector<NodalLoad> loads;
     for (const auto& e : effects_) e->add_scope_loads(view, loads);
@@ -315,6 +321,19 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
       report.failure = "contact: the scope's Delassus operator could not be formed (singular step matrix)";
       return report;
     }
+    // The wall's local compliance per contact (truth effects may make it depend on the force).
+    std::vector<double> wall_compliance(nc, settings_.contact.wall_compliance_mm_per_N);
+    if (!effects_.empty())
+      for (std::size_t a = 0; a < nc; ++a) {
+        const std::size_t node = candidates[a].scope_node;
+        for (const auto& e : effects_)
+          wall_compliance[a] = e->wall_compliance_mm_per_N(
+              ContactWallView{arc_from_tip_mm(node), candidates[a].region, warm_start_[node][0], wall_compliance[a]});
+        if (!std::isfinite(wall_compliance[a]) || wall_compliance[a] < 0.0) {
+          report.failure = "a truth effect produced an invalid wall compliance";
+          return report;
+        }
+      }
     for (std::size_t a = 0; a < nc; ++a) {
       const ContactCandidate& ca = candidates[a];
       for (std::size_t b = 0; b < nc; ++b) {
@@ -324,7 +343,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             (scope_blocks.block<3, 3>(static_cast<Eigen::Index>(3 * a), static_cast<Eigen::Index>(3 * b)) +
              compliance_->point_block(ca.colon_segment, ca.colon_weight, cb.colon_segment, cb.colon_weight)) *
             cb.frame;
-        const Eigen::Matrix3d w_local = a == b ? Eigen::Matrix3d(w + settings_.contact.wall_compliance_mm_per_N * Eigen::Matrix3d::Identity()) : w;
+        const Eigen::Matrix3d w_local = a == b ? Eigen::Matrix3d(w + wall_compliance[a] * Eigen::Matrix3d::Identity()) : w;
         for (std::size_t i = 0; i < 9; ++i)
           problem.block(a, b)[i] = w_local(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));
       }
@@ -335,7 +354,18 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         colon_last += compliance_->point_block(ca.colon_segment, ca.colon_weight, f.segment, f.weight) * f.force_N;
       const Eigen::Vector3d relative = scope_.position(ca.scope_node) - start.positions[ca.scope_node] + colon_last;
       problem.free_displacement[a] = {ca.gap_mm, ca.frame.col(1).dot(relative), ca.frame.col(2).dot(relative)};
-      mu[a] = friction_at(arc_from_tip_mm(ca.scope_node), ca.region);
+      // Sliding speed for the effects: the node's velocity relative to the wall over the last
+      // step (the colon's from its displacement now and one step earlier), across the normal.
+      double sliding_speed = 0.0;
+      if (!effects_.empty()) {
+        Eigen::Vector3d colon_before = Eigen::Vector3d::Zero();
+        for (const ColonPointForce& f : previous_colon_forces_)
+          colon_before += compliance_->point_block(ca.colon_segment, ca.colon_weight, f.segment, f.weight) * f.force_N;
+        const Eigen::Vector3d v = velocity_.segment<3>(static_cast<Eigen::Index>(6 * ca.scope_node)) - (colon_last - colon_before) / h;
+        const Eigen::Vector3d n = ca.frame.col(0);
+        sliding_speed = (v - n.dot(v) * n).norm();
+      }
+      mu[a] = friction_at(arc_from_tip_mm(ca.scope_node), ca.region, sliding_speed);
       problem.friction[a] = mu[a];
       forces[a] = warm_start_[ca.scope_node];
     }
@@ -406,9 +436,11 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
       colon_forces[a] = {c.colon_segment, c.colon_weight, -(c.frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]))};
     }
     contact_reports_ = std::move(reports);
+    previous_colon_forces_ = std::move(colon_forces_);
     colon_forces_ = std::move(colon_forces);
   } else {
     contact_reports_.clear();
+    previous_colon_forces_ = std::move(colon_forces_);
     colon_forces_.clear();
   }
   if (!increment_total.allFinite()) {

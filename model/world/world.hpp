@@ -197,7 +197,8 @@ class World {
 
   Eigen::Vector3d to_body(const Eigen::Vector3d& x) const { return anus_ + rotation_.transpose() * x; }
   Eigen::Vector3d to_body_direction(const Eigen::Vector3d& v) const { return rotation_.transpose() * v; }
-  double friction_at(double arc_from_tip_mm, ColonRegion region) const;
+  /// Friction coefficient at a contact: scenario value, zones, then the effects' hooks.
+  double friction_at(double arc_from_tip_mm, ColonRegion region, double sliding_speed_mm_per_s) const;
   WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent);
 
   WorldSettings settings_;
@@ -220,6 +221,7 @@ class World {
   double handle_torque_Nmm_ = 0;
   Eigen::VectorXd velocity_;
   std::vector<ColonPointForce> colon_forces_;  // on the colon, computation frame
+  std::vector<ColonPointForce> previous_colon_forces_;  // one step earlier: the wall's velocity for effects
   std::vector<WorldContact> contact_reports_;
   std::vector<std::array<double, 3>> warm_start_;  // last contact force (n, t, s) per scope node
   CenterlineTracking tracking_;

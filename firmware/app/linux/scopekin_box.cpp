@@ -202,7 +202,11 @@ int main(int argc, char** argv) {
         if (stop_requested.load()) {
             break;
         }
-        box.box.run_period(box.clock.now_us(), timer.overruns());
+        const std::uint64_t now_us = box.clock.now_us();
+        if (box.recorder) {
+            box.recorder->set_send_time_us(now_us);  // replay runs the period at this time
+        }
+        box.box.run_period(now_us, timer.overruns());
         if (duration_us > 0U && release_us - start_us >= duration_us) {
             break;
         }

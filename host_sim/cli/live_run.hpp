@@ -1,0 +1,36 @@
+#pragma once
+// A live simulation written to a run folder (README "Simulator outputs"): recording.csv,
+// world.csv, firmware.csv, snapshots.json and summary.json. Used by `simulate` (world
+// scenarios) and `demo`. Files are written as NAME.part; a run that fails leaves
+// NAME.incomplete.csv and a summary with status "failed".
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "host_sim/simulator/live_simulation.hpp"
+#include "model/scenario/scenario.hpp"
+
+namespace scopekin::cli {
+
+struct LiveRunOptions {
+  std::filesystem::path out;
+  std::uint64_t seed = 1;
+  bool quiet = false;
+  std::string command = "simulate";  ///< for messages
+};
+
+struct LiveRunReport {
+  host_sim::LiveResult result;
+  nlohmann::ordered_json summary;
+  bool complete = false;
+};
+
+/// Throws ModelError (bad scenario or sensor configuration: exit 2) or OutputError (exit 3).
+LiveRunReport run_live_to_folder(const model::Scenario& scenario, const LiveRunOptions& options);
+
+/// The alarm timeline and the summary table (stdout), as `demo` prints them.
+void print_run_tables(const LiveRunReport& report);
+
+}  // namespace scopekin::cli

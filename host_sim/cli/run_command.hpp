@@ -1,0 +1,20 @@
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace scopekin::cli {
+
+struct RunOptions {
+  std::string recording;
+  std::string out;
+  double gap_threshold_s = 0.05;
+  bool quiet = false;
+};
+
+/// The command's work; returns its exit status (also used by `batch`).
+int run_recording(const RunOptions& options);
+
+/// `scopekin run RECORDING.csv --out DIR`: a recording through the firmware.
+void add_run_command(CLI::App& app);
+}  // namespace scopekin::cli

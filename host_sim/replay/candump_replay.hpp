@@ -1,0 +1,56 @@
+#pragma once
+// `scopekin replay`: a candump log (candump -L / canplayer format) through the unmodified
+// firmware. Two kinds of log:
+//  * a box log (it holds the box's KineticEstimate frames, 0x181): what `scopekin-box --record`
+//    writes. Every line is in the order the box saw it: the frames it received in a period, then
+//    the frames it sent, which carry the period's release time (hal/linux/recording_can_bus.hpp).
+//    The replay gives the box the same frames with the same timestamps and runs each period at
+//    the recorded time, then compares what the box sends with what was recorded (KineticEstimate,
+//    ContactSummary, Alarms, StationForces; BoxStatus and BoxCounters carry the live box's
+//    overrun and bus counters, which a replay cannot have).
+//  * a sensor log (no 0x181): the handle sensors' frames only; the box runs every 5 ms from the
+//    first frame's time, each period after the frames stamped at or before it.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hal/candump/candump_log.hpp"
+#include "host_sim/simulator/firmware_loop.hpp"
+
+namespace scopekin::host_sim {
+
+/// A log line that could not be parsed.
+struct CandumpLineError : std::runtime_error {
+  CandumpLineError(const std::string& message, std::size_t line) : std::runtime_error(message), line_(line) {}
+  std::size_t line() const { return line_; }
+
+ private:
+  std::size_t line_;
+};
+
+struct CandumpLog {
+  std::vector<hal::CandumpRecord> records;
+  std::vector<std::size_t> lines;  ///< the file line of each record
+  bool box_log = false;
+};
+
+/// Reads a candump log; throws CandumpLineError (naming the line) for a malformed line, and for
+/// timestamps that go backwards by more than 1 s (not one recording).
+CandumpLog read_candump_log(const std::string& path);
+
+struct ReplayResult {
+  std::uint64_t periods = 0;
+  std::uint64_t frames_fed = 0;
+  std::uint64_t compared_frames = 0;   ///< box log: recorded output frames compared
+  std::uint64_t differing_frames = 0;
+  std::string first_difference;        ///< empty if none
+};
+
+/// Replays the log through a box; `on_period` sees every period (time, outputs).
+ReplayResult replay_candump(const CandumpLog& log, const std::function<void(const BoxPeriod&)>& on_period);
+
+/// True for the ids the box sends.
+bool is_box_output_id(std::uint32_t id);
+
+}  // namespace scopekin::host_sim

@@ -1,0 +1,16 @@
+#pragma once
+// firmware.csv: the box's estimator outputs, one row per period (README "Simulator outputs").
+// Q16.16 values are printed with 5 decimals, enough to give back the raw value exactly
+// (|error| <= 5e-6 < half of 2^-16), so two files are equal exactly when the outputs are.
+#include <cstdint>
+#include <ostream>
+#include <string>
+
+#include "kinetics/kinetics_io.hpp"
+
+namespace scopekin::host_sim {
+
+std::string firmware_csv_header();
+std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& outputs);
+
+}  // namespace scopekin::host_sim

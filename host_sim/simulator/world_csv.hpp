@@ -1,0 +1,18 @@
+#pragma once
+// world.csv: the true state of the world at the scenario's output rate (README "Simulator
+// outputs"): the handle, the tip and the extra nodes, contact statistics by region, and where
+// the tip is along the colon with the wall force on it.
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "host_sim/simulator/world_readout.hpp"
+#include "model/scenario/scenario.hpp"
+#include "model/scenario/simulation.hpp"
+
+namespace scopekin::host_sim {
+
+std::string world_csv_header(const model::Scenario& scenario, const std::vector<std::size_t>& nodes);
+void write_world_csv_row(std::ostream& out, const model::SimulationSample& sample, const WorldReadout& readout);
+
+}  // namespace scopekin::host_sim
