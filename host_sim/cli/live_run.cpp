@@ -1,6 +1,7 @@
 #include "host_sim/cli/live_run.hpp"
 
 #include <cstdio>
+#include <memory>
 #include <iostream>
 
 #include "host_sim/cli/cli_support.hpp"
@@ -21,11 +22,13 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
   const fs::path dir = options.out;
   prepare_directory(dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "world.csv",
                           "world.incomplete.csv", "world.csv.part", "firmware.csv", "firmware.incomplete.csv",
-                          "firmware.csv.part", "contacts.csv", "snapshots.json", "summary.json", "forces.png",
+                          "firmware.csv.part", "contacts.csv", "contacts.incomplete.csv", "contacts.csv.part", "snapshots.json", "summary.json", "forces.png",
                           "advance.png", "snapshots.png"});
   PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
   PartFile world(dir / "world.csv", dir / "world.incomplete.csv");
   PartFile firmware(dir / "firmware.csv", dir / "firmware.incomplete.csv");
+  std::unique_ptr<PartFile> contacts;
+  if (sc.outputs.contacts_file) contacts = std::make_unique<PartFile>(dir / "contacts.csv", dir / "contacts.incomplete.csv");
   if (!options.quiet)
     std::cerr << options.command << ": " << sc.source << ": " << sc.procedure.end_s() << " s in world steps of "
               << sc.settings.time_step_s << " s, colon '" << sc.colon->name() << "', sensors every 1 ms, firmware every "
@@ -33,7 +36,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
   ProgressBar bar(options.quiet);
   LiveRunReport report;
   report.result = host_sim::run_live(sc, sensor_config, options.seed,
-                                     {&recording.stream(), &world.stream(), &firmware.stream()},
+                                     {&recording.stream(), &world.stream(), &firmware.stream(), contacts ? &contacts->stream() : nullptr},
                                      [&](const model::SimulationProgress& p) { bar.update(p); });
   bar.done();
   const host_sim::LiveResult& r = report.result;
@@ -43,6 +46,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
   files["recording"] = recording.finish(sum.complete).filename().string();
   files["world"] = world.finish(sum.complete).filename().string();
   files["firmware"] = firmware.finish(sum.complete).filename().string();
+  if (contacts) files["contacts"] = contacts->finish(sum.complete).filename().string();
   write_json(dir / "snapshots.json", r.snapshots);
   files["snapshots"] = "snapshots.json";
 

@@ -112,6 +112,7 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
   const auto& actions = scenario.procedure.actions();
 
   if (streams.world != nullptr) *streams.world << world_csv_header(scenario, model::output_nodes(scenario)) << '\n';
+  if (streams.contacts != nullptr) *streams.contacts << contacts_csv_header() << '\n';
 
   model::SimulationCallbacks callbacks;
   callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
@@ -156,8 +157,9 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
       ++next_action;
     }
   };
-  callbacks.on_sample = [&](const model::SimulationSample& s, const model::World&) {
+  callbacks.on_sample = [&](const model::SimulationSample& s, const model::World& w) {
     if (streams.world != nullptr) write_world_csv_row(*streams.world, s, latest);
+    if (streams.contacts != nullptr) write_contacts_csv_rows(*streams.contacts, s.time_s, w);
   };
   callbacks.on_progress = on_progress;
 

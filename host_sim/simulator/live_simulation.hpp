@@ -23,6 +23,7 @@ struct LiveStreams {
   std::ostream* recording = nullptr;  ///< recording.csv (sensor rows)
   std::ostream* world = nullptr;      ///< world.csv (true state at the output rate)
   std::ostream* firmware = nullptr;   ///< firmware.csv (the box's outputs per period)
+  std::ostream* contacts = nullptr;   ///< contacts.csv (loaded contacts at the output rate), optional
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand

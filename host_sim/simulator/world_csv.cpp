@@ -1,5 +1,6 @@
 #include "host_sim/simulator/world_csv.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 namespace scopekin::host_sim {
@@ -38,6 +39,24 @@ void write_world_csv_row(std::ostream& out, const model::SimulationSample& s, co
   out << ',' << s.sticking_contacts << ',' << s.slipping_contacts << ','
       << (s.has_tip_driving_angle ? num(s.tip_driving_angle_deg) : std::string()) << ',' << s.gs_sweeps << ','
       << num(r.tip_path_mm) << ',' << num(r.tip_force_N.norm()) << ',' << r.tip_region << '\n';
+}
+
+std::string contacts_csv_header() {
+  return "time_s,scope_node,arc_from_tip_mm,region,x_mm,y_mm,z_mm,normal_force_N,tangential_force_N,"
+         "friction_coefficient,driving_angle_deg,state,gap_mm";
+}
+
+void write_contacts_csv_rows(std::ostream& out, double time_s, const model::World& world) {
+  for (const model::WorldContact& c : world.contacts()) {
+    if (!(c.normal_force_N > 0.0)) continue;
+    const char* state = c.state == contact::ContactState::sticking   ? "sticking"
+                        : c.state == contact::ContactState::slipping ? "slipping"
+                                                                      : "separated";
+    out << num(time_s) << ',' << c.scope_node << ',' << num(c.arc_from_tip_mm) << ',' << model::region_name(c.region)
+        << ',' << num(c.scope_point_mm.x()) << ',' << num(c.scope_point_mm.y()) << ',' << num(c.scope_point_mm.z()) << ','
+        << num(c.normal_force_N) << ',' << num(c.tangential_force_N) << ',' << num(c.friction_coefficient) << ','
+        << num(c.driving_angle_rad * 180.0 / M_PI) << ',' << state << ',' << num(c.gap_mm) << '\n';
+  }
 }
 
 }  // namespace scopekin::host_sim
