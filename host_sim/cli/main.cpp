@@ -1,4 +1,4 @@
-// scopekin: the host-side command line (reference model, later the simulator).
+// scopekin: the host-side command line (reference model, host simulator, batch runs).
 // Exit status: 0 success, 1 a check failed / a solve did not converge, 2 bad usage or invalid
 // input (the message names the field), 3 any other error (e.g. an output file not writable).
 #include <CLI/CLI.hpp>

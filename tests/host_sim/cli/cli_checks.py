@@ -185,7 +185,22 @@ def check_batch():
     expect(p.returncode == 2 or rows(summaries[0]) == [], "merging a shard twice is refused")
 
 
-CHECKS = {"demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
+def check_replay_bad_log():
+    d = fresh("replay_bad")
+    os.makedirs(d)
+    path = os.path.join(d, "bad.log")
+    write_lines(path, ["(1700000000.000000) can0 110#0000000000", "(1700000000.001000) can0 11Z#00"])
+    p = run("replay", path, "--out", os.path.join(d, "out"), expect_status=2)
+    expect("line 2" in p.stderr, f"a malformed candump line is refused naming it: {p.stderr.strip()}")
+    # A log of the handle sensors alone runs with a period every 5 ms: frames over 10 ms, periods at 5 and 10 ms.
+    good = os.path.join(d, "sensors.log")
+    write_lines(good, [f"(1700000000.{t:06d}) can0 110#0000000000" for t in range(0, 10001, 1000)])
+    run("replay", good, "--out", os.path.join(d, "good"), "--quiet")
+    s = json.load(open(os.path.join(d, "good", "summary.json")))
+    expect(s["kind"] == "sensor_log" and s["periods"] == 2 and s["frames_fed"] == 11, f"sensor log replay: {s}")
+
+
+CHECKS = {"replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
           "bad_recordings": check_bad_recordings, "batch": check_batch}
 os.makedirs(WORK, exist_ok=True)
 CHECKS[CHECK]()
