@@ -108,6 +108,7 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
   WorldReadout previous = reader.read(*world);
   WorldReadout latest = previous;
   std::int64_t last_tick_us = to_us(world->time_s());
+  std::int64_t last_delivered_us = 0;  // the box runs up to the last row, as `scopekin run` does
   std::size_t next_action = 1;
   const auto& actions = scenario.procedure.actions();
 
@@ -127,6 +128,7 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
       if (row.handle) result.peak_measured_handle_force_N = std::max(result.peak_measured_handle_force_N, std::abs(row.handle->force_N));
       if (recording_writer) recording_writer->write(row);
       firmware.deliver(row);
+      last_delivered_us = t;
       ++result.rows_delivered;
       last_tick_us = t;
     }
@@ -164,7 +166,7 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
   callbacks.on_progress = on_progress;
 
   result.world = model::run_simulation(*world, scenario, callbacks);
-  firmware.finish(static_cast<std::uint64_t>(last_tick_us));
+  firmware.finish(static_cast<std::uint64_t>(last_delivered_us));
   snapshots.erase(snapshots.begin() + static_cast<long>(std::min(snapshots.size(), kMaxSnapshots - 1)), snapshots.end());
   take_snapshot(result.world.complete ? "end" : "failure", true);
   result.snapshots = {{"colon", WorldReader::colon_json(world->colon())}, {"snapshots", snapshots}};
