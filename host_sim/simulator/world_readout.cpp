@@ -16,14 +16,6 @@ Eigen::Quaterniond axis_orientation(const Eigen::Vector3d& axis, double roll_rad
   return to_axis * Eigen::Quaterniond(Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()));
 }
 
-/// Distance of p from segment [a, b]; `s` gets the parameter of the closest point.
-double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double& s) {
-  const Eigen::Vector3d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  s = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + s * ab)).norm();
-}
-
 /// How far along the colon the tip may have moved between two readouts [mm]; the search
 /// window. A sample every world step (<= 33 ms) at hand speeds below 1 m/s moves far less.
 constexpr double kTipSearchWindow_mm = 60.0;
@@ -49,25 +41,12 @@ WorldReader::WorldReader(const model::World& world) : colon_(&world.colon()) {
 }
 
 double WorldReader::locate_tip(const Eigen::Vector3d& tip_mm, std::string& region) {
-  const model::ColonTube& colon = *colon_;
-  double best = std::numeric_limits<double>::infinity();
-  double best_path = tip_path_mm_;
-  std::size_t best_segment = 0;
-  for (std::size_t i = 0; i + 1 < colon.point_count(); ++i) {
-    const double a = colon.arc_length_mm(i), b = colon.arc_length_mm(i + 1);
-    if (b < tip_path_mm_ - kTipSearchWindow_mm || a > tip_path_mm_ + kTipSearchWindow_mm) continue;
-    double s = 0;
-    const double d = segment_distance(tip_mm, colon.points()[i].position_mm, colon.points()[i + 1].position_mm, s);
-    if (d < best) {
-      best = d;
-      best_path = a + s * (b - a);
-      best_segment = i;
-    }
-  }
-  if (!tip_mm.allFinite() || !std::isfinite(best)) return tip_path_mm_;
-  tip_path_mm_ = best_path;
-  region = std::string(model::region_name(colon.points()[best_segment].region));
-  return best_path;
+  double path = 0;
+  std::size_t segment = 0;
+  if (!colon_->closest_point_near(tip_mm, tip_path_mm_, kTipSearchWindow_mm, path, segment)) return tip_path_mm_;
+  tip_path_mm_ = path;
+  region = std::string(model::region_name(colon_->points()[segment].region));
+  return path;
 }
 
 WorldReadout WorldReader::read(const model::World& world) {

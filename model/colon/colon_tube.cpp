@@ -1,5 +1,7 @@
 #include "model/colon/colon_tube.hpp"
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -130,6 +132,26 @@ std::vector<ColonPoint> sample_centerline(const std::vector<ColonPoint>& w, doub
   }
   out.push_back(w.back());
   return out;
+}
+
+bool ColonTube::closest_point_near(const Eigen::Vector3d& point, double near_path_mm, double window_mm,
+                                   double& path_mm, std::size_t& segment) const {
+  if (!point.allFinite()) return false;
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i + 1 < points_.size(); ++i) {
+    const double a = arc_length_[i], b = arc_length_[i + 1];
+    if (b < near_path_mm - window_mm || a > near_path_mm + window_mm) continue;
+    const Eigen::Vector3d p = points_[i].position_mm, ab = points_[i + 1].position_mm - p;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0 ? std::clamp((point - p).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    const double d = (point - (p + t * ab)).norm();
+    if (d < best) {
+      best = d;
+      path_mm = a + t * (b - a);
+      segment = i;
+    }
+  }
+  return std::isfinite(best);
 }
 
 }  // namespace scopekin::model

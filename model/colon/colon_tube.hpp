@@ -32,6 +32,12 @@ class ColonTube {
   double length_mm() const { return arc_length_.back(); }
   /// Length of each region along the centerline [mm] (0 for absent regions), in kColonRegionsInOrder order.
   std::array<double, 8> region_lengths_mm() const;
+  /// The centerline point closest to `point` among the segments within `window_mm` of arc length
+  /// `near_path_mm` (a tracked point moves little between calls, and the window keeps it off other
+  /// turns of a loop that happen to be near in space). Returns false if no segment is in the
+  /// window or the point is not finite; else its arc length from the anus and the segment index.
+  bool closest_point_near(const Eigen::Vector3d& point, double near_path_mm, double window_mm, double& path_mm,
+                          std::size_t& segment) const;
   /// Narrowest inner radius and the arc length where it occurs.
   std::pair<double, double> narrowest_radius_mm() const;
 

@@ -33,21 +33,9 @@ void TipSteering::add_scope_loads(const WorldEffectView& view, std::vector<Nodal
   // Track the tip along the centerline (a window around its last place keeps it off other turns
   // of a loop); the tracking runs outside steering windows too.
   if (tip_path_mm_ < 0) tip_path_mm_ = std::max(0.0, view.insertion_depth_mm);
-  double best = std::numeric_limits<double>::infinity();
-  double best_path = tip_path_mm_;
-  for (std::size_t i = 0; i + 1 < colon_.point_count(); ++i) {
-    const double a = colon_.arc_length_mm(i), b = colon_.arc_length_mm(i + 1);
-    if (b < tip_path_mm_ - 60.0 || a > tip_path_mm_ + 60.0) continue;
-    const Eigen::Vector3d p = colon_.points()[i].position_mm, q = colon_.points()[i + 1].position_mm;
-    const double len2 = (q - p).squaredNorm();
-    const double s = len2 > 0 ? std::clamp((x_tip - p).dot(q - p) / len2, 0.0, 1.0) : 0.0;
-    const double d = (x_tip - (p + s * (q - p))).norm();
-    if (d < best) {
-      best = d;
-      best_path = a + s * (b - a);
-    }
-  }
-  if (std::isfinite(best)) tip_path_mm_ = best_path;
+  double path = 0;
+  std::size_t segment = 0;
+  if (colon_.closest_point_near(x_tip, tip_path_mm_, 60.0, path, segment)) tip_path_mm_ = path;
   if (window == nullptr) return;
 
   const double target = std::min(tip_path_mm_ + window->lookahead_mm, colon_.length_mm());
