@@ -92,8 +92,8 @@ void add_demo_command(CLI::App& app) {
       "The main job: a simulated colonoscopy through the bundled default colon and the unmodified firmware "
       "(host_sim/scenarios/demo_n_loop.json): the tip locks at the sigmoid-descending junction, an N-shaped sigmoid "
       "loop forms, the box's self-lock alarm fires, the physician withdraws with clockwise torque to straighten "
-      "it and advances again, steering the tip, into the splenic flexure (not yet to the cecum: README 'The main "
-      "job'). Prints the alarm timeline and a summary table; writes "
+      "it and advances again, steering the tip while the assistant presses on the abdomen, into the cecum. Prints "
+      "the alarm timeline, the box's fault flags and a summary table; writes "
       "recording.csv, world.csv, firmware.csv, snapshots.json, summary.json and the plots forces.png, advance.png, "
       "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid scenario, 3 an output (or a plot) "
       "cannot be written.");

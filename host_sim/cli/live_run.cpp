@@ -121,6 +121,15 @@ void print_run_tables(const LiveRunReport& report) {
     std::printf("  %8.3f s  %-24s raised (estimated tip at %.0f mm), %s\n", a["raised_s"].get<double>(),
                 a["kind"].get<std::string>().c_str(), a["estimated_tip_path_mm"].get<double>(), cleared.c_str());
   }
+  // Fault flags the box raised: what its estimates above are worth (e.g. depth_outside_model:
+  // beyond the reduced model's depth range the box holds its last estimate).
+  const Json& firmware = s["firmware"];
+  for (const auto& [name, first] : firmware["fault_first_s"].items()) {
+    const auto periods = firmware["fault_periods"][name].get<std::uint64_t>();
+    std::printf("  %8.3f s  fault flag %-20s first set; set in %llu of %llu periods (%.2f s)\n", first.get<double>(),
+                name.c_str(), static_cast<unsigned long long>(periods),
+                static_cast<unsigned long long>(firmware["periods"].get<std::uint64_t>()), static_cast<double>(periods) * host_sim::kBoxPeriodUs * 1e-6);
+  }
   std::printf("\nSummary:\n");
   std::printf("  %-40s %.2f s (%s)\n", "duration", s["duration_s"].get<double>(), s["status"].get<std::string>().c_str());
   std::printf("  %-40s %.2f N (measured %.2f N)\n", "peak handle force", s["peak_handle_force_N"]["true"].get<double>(),

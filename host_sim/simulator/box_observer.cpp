@@ -45,7 +45,7 @@ void BoxObserver::observe(const BoxPeriod& period) {
     observation_.peak_contact_station = o.max_contact_station;
   }
   for (std::size_t k = 0; k < observation_.fault_periods.size(); ++k)
-    if ((o.fault_flags & (1U << k)) != 0U) ++observation_.fault_periods[k];
+    if ((o.fault_flags & (1U << k)) != 0U && observation_.fault_periods[k]++ == 0) observation_.fault_first_s[k] = t;
   if ((o.fault_flags & kinetics::kFaultConfig) != 0U) ++observation_.estimate_invalid_periods;
 }
 
@@ -68,6 +68,10 @@ nlohmann::ordered_json BoxObserver::to_json() const {
                                          {"path_mm", observation_.peak_contact_path_mm},
                                          {"station", observation_.peak_contact_station}};
   out["fault_periods"] = faults;
+  Json first = Json::object();
+  for (std::size_t k = 0; k < observation_.fault_periods.size(); ++k)
+    if (observation_.fault_periods[k] > 0) first[kinetics_fault_names()[k]] = observation_.fault_first_s[k];
+  out["fault_first_s"] = first;
   return out;
 }
 

@@ -32,6 +32,7 @@ struct BoxObservation {
   double peak_contact_path_mm = 0;
   unsigned peak_contact_station = 0;
   std::array<std::uint64_t, 14> fault_periods{};  ///< periods with kinetics fault bit k set
+  std::array<double, 14> fault_first_s{};         ///< time of the first such period [s] (if any)
   std::uint64_t estimate_invalid_periods = 0;
 };
 

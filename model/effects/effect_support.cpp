@@ -68,4 +68,20 @@ RestColonPoint closest_rest_point(const ColonTube& colon, const Eigen::Vector3d&
   return out;
 }
 
+void for_each_node_beyond_rest_wall(const WorldEffectView& view, const std::function<bool(ColonRegion)>& in_region,
+                                    const std::function<void(const NodeBeyondRestWall&)>& visit) {
+  if (view.colon_at_rest == nullptr) return;
+  const std::vector<double> lengths = node_lengths_mm(view.arc_from_tip_mm);
+  for (std::size_t k = 0; k < view.scope_nodes_mm.size(); ++k) {
+    if (k < view.scope_node_held.size() && view.scope_node_held[k]) continue;
+    const double expected = view.insertion_depth_mm - view.arc_from_tip_mm[k];
+    if (!(expected > 0.0)) continue;  // not past the anus
+    const RestColonPoint c = closest_rest_point(*view.colon_at_rest, view.scope_nodes_mm[k], expected);
+    if (!c.found || !in_region(c.region)) continue;
+    const double excess = c.distance_mm - (c.lumen_radius_mm - view.scope_radius_mm);
+    if (!(excess > 0.0) || !(c.distance_mm > 0.0)) continue;
+    visit({k, excess, (view.scope_nodes_mm[k] - c.point_mm) / c.distance_mm, lengths[k], c.region});
+  }
+}
+
 }  // namespace scopekin::model::effects

@@ -8,6 +8,7 @@
 
 #include "model/colon/colon_tube.hpp"
 #include "model/io/strict_json.hpp"
+#include "model/world/world_effect.hpp"
 
 namespace scopekin::model::effects {
 
@@ -43,5 +44,20 @@ struct RestColonPoint {
 /// off other turns of a loop (as World::probe_stations does). Not found when the window is empty.
 RestColonPoint closest_rest_point(const ColonTube& colon, const Eigen::Vector3d& node_mm, double expected_path_mm,
                                   double search_back_mm = 400.0, double search_ahead_mm = 5.0);
+
+/// A scope node that pushes the colon's rest wall out.
+struct NodeBeyondRestWall {
+  std::size_t node = 0;
+  double excess_mm = 0;               ///< d - (R - r) > 0: how far it pushes the wall out
+  Eigen::Vector3d outward = Eigen::Vector3d::Zero();  ///< unit, from the rest centerline to the node
+  double node_length_mm = 0;          ///< scope length the node carries
+  ColonRegion region = ColonRegion::rectum;
+};
+
+/// Calls `visit` for every inserted scope node, not held by the hand, whose closest rest
+/// centerline point (closest_rest_point, from its expected place depth - arc) lies in a region
+/// `in_region` accepts and which is further than R - r from that centerline.
+void for_each_node_beyond_rest_wall(const WorldEffectView& view, const std::function<bool(ColonRegion)>& in_region,
+                                    const std::function<void(const NodeBeyondRestWall&)>& visit);
 
 }  // namespace scopekin::model::effects

@@ -38,23 +38,13 @@ double MesentericRetraction::force_N(double excess_mm, double node_length_mm) co
 }
 
 void MesentericRetraction::add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const {
-  if (p_.stiffness_N_per_mm2 == 0.0 || view.colon_at_rest == nullptr) return;
-  const std::vector<double> lengths = effects::node_lengths_mm(view.arc_from_tip_mm);
-  for (std::size_t k = 0; k < view.scope_nodes_mm.size(); ++k) {
-    if (k < view.scope_node_held.size() && view.scope_node_held[k]) continue;
-    const double expected = view.insertion_depth_mm - view.arc_from_tip_mm[k];
-    if (!(expected > 0.0)) continue;  // not past the anus
-    const effects::RestColonPoint c = effects::closest_rest_point(*view.colon_at_rest, view.scope_nodes_mm[k], expected);
-    if (!c.found || c.region != ColonRegion::sigmoid) continue;
-    const double excess = c.distance_mm - (c.lumen_radius_mm - view.scope_radius_mm);
-    const double f = force_N(excess, lengths[k]);
-    if (!(f > 0.0) || !(c.distance_mm > 0.0)) continue;
-    const Eigen::Vector3d u = (view.scope_nodes_mm[k] - c.point_mm) / c.distance_mm;
-    NodalLoad load;
-    load.node = k;
-    load.force_N = -f * u;
-    loads.push_back(load);
-  }
+  if (p_.stiffness_N_per_mm2 == 0.0) return;
+  effects::for_each_node_beyond_rest_wall(
+      view, [](ColonRegion r) { return r == ColonRegion::sigmoid; },
+      [&](const effects::NodeBeyondRestWall& n) {
+        const double f = force_N(n.excess_mm, n.node_length_mm);
+        if (f > 0.0) loads.push_back({n.node, -f * n.outward, Eigen::Vector3d::Zero()});
+      });
 }
 
 }  // namespace scopekin::model

@@ -1,12 +1,15 @@
 #include "model/scenario/scenario.hpp"
 
 #include <algorithm>
+#include <tuple>
+#include <utility>
 #include <cmath>
 #include <sstream>
 
 #include "model/colon/bundled_colons.hpp"
 #include "model/colon/colon_beam.hpp"
 #include "model/effects/effect_library.hpp"
+#include "model/scenario/abdominal_pressure.hpp"
 #include "model/scenario/tip_steering.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
@@ -34,6 +37,15 @@ ColonRegion read_region(const JsonObject& o, const char* key) {
 
 ColonRegion read_region_or(const JsonObject& o, const char* key, ColonRegion fallback) {
   return o.has(key) ? read_region(o, key) : fallback;
+}
+
+/// start_s and end_s of a time window (steering, abdominal pressure): start >= 0, end > start [s].
+std::pair<double, double> read_window_times(const JsonObject& w) {
+  const double start_s = w.number("start_s");
+  const double end_s = w.number("end_s");
+  require_non_negative(start_s, w.field("start_s"));
+  if (!(end_s > start_s)) throw ModelError(w.field("end_s") + ": " + number_text(end_s) + " s must be later than start_s");
+  return {start_s, end_s};
 }
 
 double positive(const JsonObject& o, const char* key) {
@@ -265,7 +277,8 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
 
   sc.kind = ScenarioKind::world;
   root.allow_only({"description", "colon", "colon_regions", "scope", "gravity_mm_per_s2", "initial_insertion_mm",
-                   "solver", "procedure", "outputs", "truth_effects", "sensors", "steering"});
+                   "solver", "procedure", "outputs", "truth_effects", "sensors", "steering",
+                   "abdominal_pressure"});
   sc.scope = read_scope(root.object("scope"), sc.scope_model);
   sc.colon = read_colon(root.object("colon"), sc.scope.radius_mm);
 
@@ -342,20 +355,46 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
       const JsonObject w(windows[i], item(path, i));
       w.allow_only({"start_s", "end_s", "lookahead_mm", "bending_section_mm", "gain"});
       SteeringWindow window;
-      window.start_s = w.number("start_s");
-      window.end_s = w.number("end_s");
+      std::tie(window.start_s, window.end_s) = read_window_times(w);
       window.lookahead_mm = positive_or(w, "lookahead_mm", window.lookahead_mm);
       window.bending_section_mm = positive_or(w, "bending_section_mm", window.bending_section_mm);
       window.gain = positive_or(w, "gain", window.gain);
-      require_non_negative(window.start_s, w.field("start_s"));
-      if (!(window.end_s > window.start_s))
-        throw ModelError(w.field("end_s") + ": " + number_text(window.end_s) + " s must be later than start_s");
       if (window.gain > 1.0) throw ModelError(w.field("gain") + ": " + number_text(window.gain) + " must be in (0, 1]");
       sc.steering.push_back(window);
     }
     const double element_mm = sc.scope.length_mm / static_cast<double>(sc.scope.elements);
     sc.effects.push_back(std::make_shared<TipSteering>(sc.steering, *sc.colon,
                                                        sc.scope.section.bending_stiffness_z_Nmm2, element_mm));
+  }
+  if (root.has("abdominal_pressure")) {
+    const nlohmann::json& windows = root.array("abdominal_pressure");
+    const std::string path = root.field("abdominal_pressure");
+    for (std::size_t i = 0; i < windows.size(); ++i) {
+      const JsonObject w(windows[i], item(path, i));
+      w.allow_only({"start_s", "end_s", "regions", "stiffness_N_per_mm2", "ramp_s"});
+      AbdominalPressureWindow window;
+      std::tie(window.start_s, window.end_s) = read_window_times(w);
+      window.stiffness_N_per_mm2 = positive_or(w, "stiffness_N_per_mm2", window.stiffness_N_per_mm2);
+      window.ramp_s = w.number_or("ramp_s", std::min(window.ramp_s, window.end_s - window.start_s));
+      if (!(window.ramp_s >= 0.0 && window.ramp_s <= window.end_s - window.start_s))
+        throw ModelError(w.field("ramp_s") + ": " + number_text(window.ramp_s) + " s must be in [0, end_s - start_s]");
+      if (window.stiffness_N_per_mm2 > 1.0)
+        throw ModelError(w.field("stiffness_N_per_mm2") + ": " + number_text(window.stiffness_N_per_mm2) + " must be in (0, 1]");
+      if (w.has("regions")) {
+        const nlohmann::json& names = w.array("regions");
+        window.regions.clear();
+        for (std::size_t r = 0; r < names.size(); ++r) {
+          const std::string at = item(w.field("regions"), r);
+          if (!names[r].is_string()) throw ModelError(at + ": must be a region name (string)");
+          const auto region = region_from_name(names[r].get<std::string>());
+          if (!region) throw ModelError(at + ": unknown region '" + names[r].get<std::string>() + "' (known: " + region_list() + ")");
+          window.regions.push_back(*region);
+        }
+        if (window.regions.empty()) throw ModelError(w.field("regions") + ": name at least one region");
+      }
+      sc.abdominal_pressure.push_back(window);
+    }
+    sc.effects.push_back(std::make_shared<AbdominalPressure>(sc.abdominal_pressure));
   }
   if (root.has("outputs")) sc.outputs = read_outputs(root.object("outputs"), sc.scope.length_mm, sc.scope.elements, sc.settings.time_step_s);
   return sc;

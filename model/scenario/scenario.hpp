@@ -18,6 +18,7 @@
 #include "model/colon/colon_tube.hpp"
 #include "model/io/beam_problem.hpp"
 #include "model/scenario/procedure.hpp"
+#include "model/scenario/abdominal_pressure.hpp"
 #include "model/scenario/tip_steering.hpp"
 #include "model/world/world.hpp"
 
@@ -50,6 +51,9 @@ struct Scenario {
   /// "steering": when the physician steers the tip down the lumen (model/scenario/tip_steering.hpp);
   /// added to `effects` as a TipSteering.
   std::vector<SteeringWindow> steering;
+  /// "abdominal_pressure": when and where the assistant presses on the abdomen
+  /// (model/scenario/abdominal_pressure.hpp); added to `effects` as an AbdominalPressure.
+  std::vector<AbdominalPressureWindow> abdominal_pressure;
   /// "sensors": the host simulator's sensor models (host_sim/sensors/SENSORS.md), read there.
   nlohmann::json sensors = nlohmann::json::object();
   std::string sensors_path = "sensors";

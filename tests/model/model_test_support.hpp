@@ -8,6 +8,10 @@
 #include <random>
 #include <string>
 
+#include "model/colon/colon_tube.hpp"
+#include "model/scope/cf_q160l.hpp"
+#include "model/world/world_effect.hpp"
+
 namespace scopekin::model::testing {
 
 class Random {
@@ -31,6 +35,24 @@ class Random {
  private:
   std::mt19937 engine_;
 };
+
+/// Three CF-Q160L nodes 10 mm apart (handle side first) in a straight tube along +x, inserted
+/// 120 mm: node 0 at x = 100 (20 mm from the tip) 12 mm off the axis along +y, node 1 at 110,
+/// 20 mm along +z, the tip at 120, 5 mm along +z. None held; `tube` is the colon at rest.
+inline WorldEffectView three_node_view(const ColonTube& tube, double time_s = 0.0) {
+  WorldEffectView v;
+  v.time_s = time_s;
+  v.time_step_s = 0.01;
+  v.insertion_depth_mm = 120.0;
+  v.scope_radius_mm = cf_q160l::kRadius_mm;
+  v.scope_nodes_mm = {{100.0, 12.0, 0.0}, {110.0, 0.0, 20.0}, {120.0, 0.0, 5.0}};
+  v.arc_from_tip_mm = {20.0, 10.0, 0.0};
+  v.scope_velocities_mm_per_s.assign(3, Eigen::Vector3d::Zero());
+  v.scope_axes.assign(3, Eigen::Vector3d::UnitX());
+  v.scope_node_held.assign(3, false);
+  v.colon_at_rest = &tube;
+  return v;
+}
 
 /// Max-norm of the difference, compared against an absolute tolerance.
 inline ::testing::AssertionResult matrices_near(const Eigen::MatrixXd& actual, const Eigen::MatrixXd& expected,

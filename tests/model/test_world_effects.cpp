@@ -9,6 +9,7 @@
 #include "model/colon/bundled_colons.hpp"
 #include "model/colon/colon_beam.hpp"
 #include "model/effects/effect_library.hpp"
+#include "model_test_support.hpp"
 #include "model/effects/ei_profile.hpp"
 #include "model/effects/ei_scale.hpp"
 #include "model/effects/mesenteric_retraction.hpp"
@@ -177,26 +178,9 @@ TEST(WorldEffectEiProfile, SectionsFollowTheProfileAtElementMidpoints) {
   EXPECT_NEAR(sections[9].bending_stiffness_y_Nmm2, 0.275 * s0.bending_stiffness_y_Nmm2, 1e-9);
 }
 
-/// Three scope nodes 10 mm apart (handle side first) in a straight sigmoid tube along +x of
-/// inner radius 15 mm: node 0 at x = 100 (20 mm from the tip), node 1 at 110, the tip at 120.
-WorldEffectView hand_view(const ColonTube& tube) {
-  WorldEffectView v;
-  v.time_s = 0.0;
-  v.time_step_s = 0.01;
-  v.insertion_depth_mm = 120.0;
-  v.scope_radius_mm = kScopeRadius;
-  v.scope_nodes_mm = {{100.0, 12.0, 0.0}, {110.0, 0.0, 20.0}, {120.0, 0.0, 5.0}};
-  v.arc_from_tip_mm = {20.0, 10.0, 0.0};
-  v.scope_velocities_mm_per_s.assign(3, Eigen::Vector3d::Zero());
-  v.scope_axes.assign(3, Eigen::Vector3d::UnitX());
-  v.scope_node_held.assign(3, false);
-  v.colon_at_rest = &tube;
-  return v;
-}
-
 TEST(WorldEffectMesentericRetraction, ForceOnNodesDisplacedBeyondTheRestWall) {
   const ColonTube tube = straight_tube(400.0, 15.0, ColonRegion::sigmoid, kScopeRadius);
-  const WorldEffectView view = hand_view(tube);
+  const WorldEffectView view = testing::three_node_view(tube);
   const double free_play = 15.0 - kScopeRadius;  // 8.35 mm: the node touches the rest wall there
   std::vector<NodalLoad> loads;
   MesentericRetraction({0.002, 1.0, 10.0}).add_scope_loads(view, loads);
@@ -219,7 +203,7 @@ TEST(WorldEffectMesentericRetraction, ForceOnNodesDisplacedBeyondTheRestWall) {
   // Only the sigmoid retracts; held nodes and nodes outside the body are left alone.
   const ColonTube descending = straight_tube(400.0, 15.0, ColonRegion::descending, kScopeRadius);
   loads.clear();
-  MesentericRetraction({0.002, 1.0, 10.0}).add_scope_loads(hand_view(descending), loads);
+  MesentericRetraction({0.002, 1.0, 10.0}).add_scope_loads(testing::three_node_view(descending), loads);
   EXPECT_TRUE(loads.empty());
   WorldEffectView held = view;
   held.scope_node_held = {true, true, false};
@@ -239,7 +223,7 @@ TEST(WorldEffectMesentericRetraction, ForceOnNodesDisplacedBeyondTheRestWall) {
 
 TEST(WorldEffectSigmoidMobility, LoadAtAQuarterPeriodIsAmplitudeTimesLength) {
   const ColonTube tube = straight_tube(400.0, 15.0, ColonRegion::sigmoid, kScopeRadius);
-  WorldEffectView view = hand_view(tube);
+  WorldEffectView view = testing::three_node_view(tube);
   const double f = 0.5, a = 0.01;
   view.time_s = 1.0 / (4.0 * f);  // sin(pi / 2) = 1
   std::vector<NodalLoad> loads;
@@ -265,7 +249,7 @@ TEST(WorldEffectSigmoidMobility, LoadAtAQuarterPeriodIsAmplitudeTimesLength) {
   // Outside the sigmoid: nothing.
   const ColonTube rectum = straight_tube(400.0, 15.0, ColonRegion::rectum, kScopeRadius);
   loads.clear();
-  SigmoidMobility(p).add_scope_loads(hand_view(rectum), loads);
+  SigmoidMobility(p).add_scope_loads(testing::three_node_view(rectum), loads);
   EXPECT_TRUE(loads.empty());
 }
 

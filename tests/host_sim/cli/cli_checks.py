@@ -62,16 +62,23 @@ def check_demo():
     eff = s["advance_efficiency_by_region"]
     expect(0.9 < eff["rectum"]["efficiency"] <= 1.05, f"the tip follows the hand in the rectum: {eff.get('rectum')}")
     expect(eff["sigmoid"]["efficiency"] < 0.95, "the sigmoid loop costs advance")
-    expect(s["final_tip"]["path_mm"] > 700, f"the tip gets past the sigmoid-descending junction: {s['final_tip']}")
+    # The colonoscopy ends in the cecum (it starts ~1530 mm along the default colon).
+    expect(s["final_tip"]["region"] == "cecum", f"the tip reaches the cecum: {s['final_tip']}")
+    expect(s["peak_handle_force_N"]["true"] < 43.0, "peak handle force below the 43 N peak push measured in patients (firmware/fixed_point/RANGES.md [A])")
+    # Past the reduced model's depth range (760 mm) the box holds its estimate and says so.
+    first = s["firmware"]["fault_first_s"]
+    expect("depth_outside_model" in first and 60.0 < first["depth_outside_model"] < 65.0,
+           f"depth_outside_model flagged from ~62.7 s (20 + 25 * (t - 50.5) - 225 > 760): {first}")
+    expect("fault flag depth_outside_model" in p.stdout, "the demo prints the fault flags it saw")
     world = rows(os.path.join(out, "world.csv"))
     firmware = rows(os.path.join(out, "firmware.csv"))
-    # 76 s at 30 Hz: 2281 rows (one at t = 0); the box every 5 ms: 15200 periods.
-    expect(len(world) == 2281, f"world.csv rows: {len(world)}")
-    expect(len(firmware) == 15200, f"firmware.csv rows: {len(firmware)}")
+    # 100.2 s at 30 Hz: 3007 rows (one at t = 0); the box every 5 ms: 20040 periods.
+    expect(len(world) == 3007, f"world.csv rows: {len(world)}")
+    expect(len(firmware) == 20040, f"firmware.csv rows: {len(firmware)}")
     recording = rows(os.path.join(out, "recording.csv"))
     force_rows = sum(1 for r in recording if r["handle_force_N"] != "")
-    # The force cell at 1 kHz (no dropouts by default): one sample per ms from 1 ms to 76 s.
-    expect(force_rows == 76000, f"handle force samples: {force_rows}")
+    # The force cell at 1 kHz (no dropouts by default): one sample per ms from 1 ms to 100.2 s.
+    expect(force_rows == 100200, f"handle force samples: {force_rows}")
     snaps = json.load(open(os.path.join(out, "snapshots.json")))
     labels = [x["label"] for x in snaps["snapshots"]]
     expect(labels[0] == "self_lock alarm raised" and labels[-1] == "end" and len(labels) >= 4, f"snapshots: {labels}")
