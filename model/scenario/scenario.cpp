@@ -1,6 +1,7 @@
 #include "model/scenario/scenario.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <tuple>
 #include <utility>
 #include <cmath>
@@ -400,6 +401,29 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
   return sc;
 }
 
-Scenario read_scenario_file(const std::string& filename) { return read_scenario(io::parse_json_file(filename), filename); }
+nlohmann::json with_model_file(nlohmann::json document, const std::string& filename) {
+  if (!document.is_object() || !document.contains("model")) return document;
+  const nlohmann::json& reference = document["model"];
+  if (!reference.is_string())
+    throw ModelError(filename + ": model: expected the name of a model file (string), relative to this file");
+  const std::filesystem::path model_path =
+      std::filesystem::path(filename).parent_path() / std::filesystem::path(reference.get<std::string>());
+  nlohmann::json merged = io::parse_json_file(model_path.string());
+  if (!merged.is_object()) throw ModelError(model_path.string() + ": expected a JSON object (a model)");
+  if (merged.contains("model")) throw ModelError(model_path.string() + ": model: a model file cannot name another model");
+  for (const auto& [key, value] : document.items()) {
+    if (key == "model") continue;
+    if (key == "truth_effects" && merged.contains("truth_effects") && merged["truth_effects"].is_array() && value.is_array()) {
+      for (const auto& e : value) merged["truth_effects"].push_back(e);
+      continue;
+    }
+    merged[key] = value;
+  }
+  return merged;
+}
+
+Scenario read_scenario_file(const std::string& filename) {
+  return read_scenario(with_model_file(io::parse_json_file(filename), filename), filename);
+}
 
 }  // namespace scopekin::model

@@ -64,7 +64,12 @@ struct Scenario {
 
 /// Reads and validates a scenario document; `source` names it in messages.
 Scenario read_scenario(const nlohmann::json& document, const std::string& source);
+/// Reads a scenario file. A key "model": "FILE" (relative to the scenario file; e.g. the model.json
+/// of `scopekin discrepancy`) takes every key from that model file that the scenario does not
+/// give itself; truth_effects are joined (the model's first).
 Scenario read_scenario_file(const std::string& filename);
+/// The document with its "model" file merged in (as read_scenario_file does).
+nlohmann::json with_model_file(nlohmann::json document, const std::string& filename);
 
 /// Scope node nearest to `arc_from_tip_mm` on a uniform scope of `elements` elements.
 std::size_t scope_node_from_tip(double arc_from_tip_mm, double scope_length_mm, std::size_t elements);

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "model/colon/colon_beam.hpp"
@@ -320,6 +322,31 @@ ProcedureAction act(ActionKind kind, double start, double end) {
   a.start_s = start;
   a.end_s = end;
   return a;
+}
+
+TEST(ScenarioReader, ModelFileFillsInAndJoinsTruthEffects) {
+  // A model file (as scopekin discrepancy writes) next to a scenario that names it.
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "scopekin_test_model_file";
+  std::filesystem::create_directories(dir / "fit");
+  std::ofstream(dir / "fit" / "model.json") << R"({"colon": {"bundled": "straight_tube", "length_mm": 300, "inner_radius_mm": 15},
+    "scope": {"model": "cf_q160l", "length_mm": 400, "elements": 40}, "solver": {"time_step_s": 0.02},
+    "truth_effects": [{"name": "ei_scale", "factor": 0.9}]})";
+  std::ofstream(dir / "scenario.json") << R"({"model": "fit/model.json", "solver": {"time_step_s": 0.01},
+    "procedure": [{"action": "advance", "start_s": 0, "end_s": 1, "speed_mm_per_s": 10}],
+    "truth_effects": [{"name": "viscoadhesive_friction"}]})";
+  const Scenario s = read_scenario_file((dir / "scenario.json").string());
+  EXPECT_EQ(s.colon->name(), "straight_tube");                // from the model
+  EXPECT_EQ(s.scope.length_mm, 400.0);
+  EXPECT_EQ(s.settings.time_step_s, 0.01);                    // the scenario's own key wins
+  ASSERT_EQ(s.effects.size(), 2u);                            // joined, the model's first
+  EXPECT_EQ(s.effects[0]->name(), "ei_scale");
+  EXPECT_EQ(s.effects[1]->name(), "viscoadhesive_friction");
+
+  std::ofstream(dir / "bad.json") << R"({"model": 3, "procedure": []})";
+  EXPECT_THROW(read_scenario_file((dir / "bad.json").string()), ModelError);
+  std::ofstream(dir / "missing.json") << R"({"model": "nowhere.json", "procedure": []})";
+  EXPECT_THROW(read_scenario_file((dir / "missing.json").string()), ModelError);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ProcedurePlayer, CommandTimelineMatchesHandComputedDepthsAndRolls) {

@@ -1,0 +1,57 @@
+#pragma once
+// The library of candidate effects the workflow tries (model/effects/EFFECTS.md): for each,
+// which parameters are fitted (with units, bounds, the neutral value where the effect vanishes
+// and the step of the finite-difference Jacobian), which are held, and how fitted values become
+// the effect's entry in truth_effects.
+//
+// Held parameters (stated, README "Discrepancy workflow"): viscoadhesive_friction's cap
+// max_friction_increase (0.25), mesenteric_retraction's exponent (1), ei_profile's bending
+// section (none). sigmoid_mobility is linear in A cos(phi) and A sin(phi) for a given frequency
+// and direction; those two are fitted, and the frequency is read off the
+// residual first (the strongest periodic component, 0.05-2 Hz). The direction d (polar angle from
+// +z, azimuth from +x) is fitted too; its first value comes from the screening: the load
+// u sin(w t) + v cos(w t) is linear in the vectors u, v (six runs along the axes), and
+// u = A cos(phi) d, v = A sin(phi) d is its best rank-one approximation (SVD).
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/model_run.hpp"
+
+namespace scopekin::discrepancy {
+
+struct FittedParameter {
+  std::string key;      ///< the name in the fit (the effect's key, or a derived one)
+  std::string unit;
+  double lo = 0, hi = 0;
+  double neutral = 0;   ///< where the effect vanishes (the fit starts there)
+  double step = 0;      ///< finite-difference step
+};
+
+struct Candidate {
+  std::string name;     ///< the effect's identifier
+  std::string acts;     ///< where it acts, for the report
+  std::vector<FittedParameter> parameters;
+  /// Held parameters, read off the baseline residual where needed (sigmoid_mobility).
+  std::function<nlohmann::json(const BenchData&, const ModelPrediction& baseline)> held;
+  /// The truth_effects entry for fitted values and the held parameters.
+  std::function<nlohmann::json(const std::vector<double>& values, const nlohmann::json& held)> entry;
+};
+
+/// The six effects of the host simulator's library, in EFFECTS.md order.
+const std::vector<Candidate>& candidate_library();
+
+/// The strongest periodic component of the baseline's residuals (every assessed output, in units
+/// of its noise): frequency [Hz] in 0.05-2 Hz, and the principal direction of the position
+/// residuals at it (unit, colon frame; a first guess: the screening fits the direction).
+struct PeriodicResidual {
+  double frequency_Hz = 0.25;
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitY();
+};
+PeriodicResidual strongest_periodic_residual(const BenchData& data, const ModelPrediction& baseline,
+                                             const std::vector<double>& sigma);
+
+}  // namespace scopekin::discrepancy

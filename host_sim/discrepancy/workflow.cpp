@@ -1,0 +1,373 @@
+#include "host_sim/discrepancy/workflow.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <optional>
+
+#include "host_sim/discrepancy/analysis.hpp"
+
+namespace scopekin::discrepancy {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+/// Candidates refined after screening (the rest keep their one-step fit).
+constexpr std::size_t kRefined = 2;
+/// Pairs refined after the linearised ranking.
+constexpr std::size_t kPairs = 2;
+/// How much more of the excess error a pair must explain than the best single effect.
+constexpr double kPairGain = 0.05;
+
+/// Share of the held-out excess error (cost above the noise floor) a fit removes, in [0, 1].
+double share_explained(double cost_before, double cost_after, double floor) {
+  const double excess = cost_before - floor;
+  if (!(excess > 0.0)) return 0.0;
+  return std::clamp((cost_before - cost_after) / excess, 0.0, 1.0);
+}
+
+Json rmse_per_output(const BenchData& data, const ModelPrediction& p, SampleSet set) {
+  Json out = Json::object();
+  for (std::size_t o = 0; o < data.outputs.size(); ++o) out[output_name(data.outputs[o].id)] = rms_error(data, p, o, set);
+  return out;
+}
+
+/// Held-out RMS error per region (the recording's label, else the model's) and output.
+Json rmse_by_region(const BenchData& data, const ModelPrediction& before, const ModelPrediction& after) {
+  std::map<std::string, std::vector<std::array<double, 3>>> acc;  // region -> per output (sum before, sum after, n)
+  for (std::size_t o = 0; o < data.outputs.size(); ++o) {
+    const MeasuredSeries& m = data.outputs[o];
+    for (std::size_t i = 0; i < m.time_s.size(); ++i) {
+      if (!in_set(data, m.time_s[i], SampleSet::held_out)) continue;
+      std::string region = data.region_at(m.time_s[i]);
+      if (region.empty()) region = before.region_at(m.time_s[i]);
+      if (region.empty()) region = "outside";
+      auto& slot = acc[region];
+      slot.resize(data.outputs.size(), {0.0, 0.0, 0.0});
+      slot[o][0] += (m.value[i] - before.outputs[o][i]).squaredNorm();
+      slot[o][1] += (m.value[i] - after.outputs[o][i]).squaredNorm();
+      slot[o][2] += 1.0;
+    }
+  }
+  Json out = Json::object();
+  for (const auto& [region, per_output] : acc) {
+    Json r = Json::object();
+    for (std::size_t o = 0; o < data.outputs.size(); ++o) {
+      if (per_output[o][2] == 0.0) continue;
+      r[output_name(data.outputs[o].id)] = {{"samples", static_cast<std::size_t>(per_output[o][2])},
+                                            {"before", std::sqrt(per_output[o][0] / per_output[o][2])},
+                                            {"after", std::sqrt(per_output[o][1] / per_output[o][2])}};
+    }
+    out[region] = r;
+  }
+  return out;
+}
+
+/// The parameters of each effect of a fit: fitted ones with unit and SD, held ones marked.
+Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
+  const Candidate& c = candidate_library()[fit.candidates[k]];
+  std::size_t at = 0;
+  for (std::size_t j = 0; j < k; ++j) at += candidate_library()[fit.candidates[j]].parameters.size();
+  Json params = Json::array();
+  if (c.name == "sigmoid_mobility") {
+    // Fitted as A cos(phi), A sin(phi); reported as A and phi (first-order error propagation).
+    const double a = fit.values[at], b = fit.values[at + 1];
+    const double sa = fit.sd.size() > at ? fit.sd[at] : NAN, sb = fit.sd.size() > at + 1 ? fit.sd[at + 1] : NAN;
+    const double amp = std::hypot(a, b);
+    const double sd_amp = amp > 0 ? std::hypot(a * sa, b * sb) / amp : NAN;
+    const double sd_phase = amp > 0 ? std::hypot(b * sa, a * sb) / (amp * amp) : NAN;
+    params.push_back({{"name", "amplitude_N_per_mm"}, {"value", amp}, {"unit", "N/mm"}, {"sd", sd_amp}, {"fitted", true}});
+    params.push_back({{"name", "phase_rad"}, {"value", std::atan2(b, a)}, {"unit", "rad"}, {"sd", sd_phase}, {"fitted", true}});
+    params.push_back({{"name", "frequency_Hz"}, {"value", fit.held[k]["frequency_Hz"]}, {"unit", "Hz"}, {"sd", nullptr},
+                      {"fitted", false}, {"how", "read off the residual (its strongest periodic component, 0.01 Hz grid)"}});
+    const double polar = fit.values[at + 2], azimuth = fit.values[at + 3];
+    params.push_back({{"name", "direction"},
+                      {"value", {std::sin(polar) * std::cos(azimuth), std::sin(polar) * std::sin(azimuth), std::cos(polar)}},
+                      {"unit", "1"}, {"sd", nullptr}, {"fitted", true},
+                      {"how", "fitted as direction_polar_rad, direction_azimuth_rad"}});
+    for (std::size_t j = 2; j < 4; ++j) {
+      const double sd = fit.sd.size() > at + j ? fit.sd[at + j] : NAN;
+      params.push_back({{"name", c.parameters[j].key}, {"value", fit.values[at + j]}, {"unit", "rad"},
+                        {"sd", std::isfinite(sd) ? Json(sd) : Json(nullptr)}, {"fitted", true}});
+    }
+    return params;
+  }
+  for (std::size_t j = 0; j < c.parameters.size(); ++j) {
+    const double sd = fit.sd.size() > at + j ? fit.sd[at + j] : NAN;
+    params.push_back({{"name", c.parameters[j].key},
+                      {"value", fit.values[at + j]},
+                      {"unit", c.parameters[j].unit},
+                      {"sd", std::isfinite(sd) ? Json(sd) : Json(nullptr)},
+                      {"fitted", true}});
+  }
+  for (const auto& [key, value] : fit.held[k].items())
+    params.push_back({{"name", key}, {"value", value}, {"unit", nullptr}, {"sd", nullptr}, {"fitted", false}, {"how", "held"}});
+  return params;
+}
+
+std::vector<std::string> names_of(const EffectSetFit& fit) {
+  std::vector<std::string> names;
+  for (std::size_t c : fit.candidates) names.push_back(candidate_library()[c].name);
+  return names;
+}
+
+}  // namespace
+
+WorkflowResult run_discrepancy(const BenchData& data, const WorkflowOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  auto progress = [&](const std::string& stage, double fraction) {
+    if (options.progress) options.progress(stage, fraction);
+  };
+  const nlohmann::json model = options.model.is_null() ? default_model() : options.model;
+  Evaluator evaluator(model, options.model_source, data, options.threads);
+  const std::vector<double> sigma = estimate_noise(data);
+  double floor = 0.0;  // held-out cost of noise alone: 1 per assessed output
+  for (std::size_t o = 0; o < data.outputs.size(); ++o) floor += assessable(sigma, o) ? 1.0 : 0.0;
+  if (floor == 0.0)
+    throw DiscrepancyInputError(data.source + ": no output's noise can be estimated from the data (too few samples, "
+                                "or a sensor that never reads above 0)");
+  const double total_fits = static_cast<double>(kRefined + 5);
+
+  progress("the model as given", 0.0);
+  WorkflowResult result;
+  result.before = evaluator.run(nlohmann::json::array());
+  if (!result.before.ok)
+    throw DiscrepancyInputError(data.source + ": the model as given cannot follow this recording's hand motion (" +
+                                result.before.failure + ")");
+  const double cost_before = normalised_residuals(data, result.before, sigma, SampleSet::held_out).squaredNorm();
+
+  // Is there anything to explain?
+  Json significance = Json::object();
+  std::size_t most_affected = 0;
+  double worst_ratio = -1.0;
+  bool significant = false;
+  for (std::size_t o = 0; o < data.outputs.size(); ++o) {
+    const double rms = rms_error(data, result.before, o, SampleSet::held_out);
+    if (!assessable(sigma, o)) {
+      significance[output_name(data.outputs[o].id)] = {
+          {"noise_sd", nullptr}, {"held_out_rms", rms}, {"assessed", false},
+          {"why", "its noise cannot be estimated from the data (the sensor reads 0 nearly all the time)"}};
+      continue;
+    }
+    const double ratio = rms / sigma[o];
+    if (ratio > worst_ratio) {
+      worst_ratio = ratio;
+      most_affected = o;
+    }
+    significant = significant || ratio > options.significance;
+    significance[output_name(data.outputs[o].id)] = {
+        {"noise_sd", sigma[o]}, {"held_out_rms", rms}, {"assessed", true}, {"rms_over_noise", ratio},
+        {"significant", ratio > options.significance}};
+  }
+
+  std::string verdict = "none";
+  const EffectSetFit* chosen = nullptr;
+  if (significant) {
+    // 1. Screen every candidate (one Gauss-Newton step each from a shared Jacobian).
+    progress("screening the candidates", 1.0 / total_fits);
+    const std::vector<EffectSetFit> screened = screen_candidates(evaluator, data, result.before, sigma);
+    result.candidates = screened;
+    auto by_held_out = [](const EffectSetFit& a, const EffectSetFit& b) {
+      if (a.ok != b.ok) return a.ok;
+      return a.held_out_cost < b.held_out_cost;
+    };
+    std::sort(result.candidates.begin(), result.candidates.end(), by_held_out);
+    // 2. Refine the best single effect; the next ones only while the refined ones explain too little.
+    for (std::size_t k = 0; k < std::min(kRefined, result.candidates.size()); ++k) {
+      if (!result.candidates[k].ok) continue;
+      const std::size_t c = result.candidates[k].candidates[0];
+      progress("fitting " + candidate_library()[c].name, (2.0 + static_cast<double>(k)) / total_fits);
+      const std::vector<double> start = result.candidates[k].values;
+      const std::vector<nlohmann::json> held = result.candidates[k].held;
+      EffectSetFit refined = fit_effect_set({c}, evaluator, data, result.before, sigma, &start, &held);
+      if (refined.ok) result.candidates[k] = std::move(refined);
+      if (share_explained(cost_before, result.candidates[k].held_out_cost, floor) >= options.min_share) break;
+    }
+    std::sort(result.candidates.begin(), result.candidates.end(), by_held_out);
+    auto share_of = [&](const EffectSetFit& f) { return f.ok ? share_explained(cost_before, f.held_out_cost, floor) : 0.0; };
+    auto leaves_nothing_significant = [&](const EffectSetFit& f) {
+      for (std::size_t o = 0; o < data.outputs.size(); ++o)
+        if (assessable(sigma, o) && rms_error(data, f.prediction, o, SampleSet::held_out) / sigma[o] > options.significance)
+          return false;
+      return true;
+    };
+    const std::size_t best_single = 0;
+    const bool single_explains = share_of(result.candidates[best_single]) >= options.min_share;
+    std::optional<std::size_t> chosen_index;
+    if (single_explains && leaves_nothing_significant(result.candidates[best_single])) {
+      chosen_index = best_single;
+    } else {
+      // 3. Pairs: ranked by the linearised joint step (no run), the best kPairs refined.
+      const std::vector<PairEstimate> ranked = rank_pairs_linear(screened, result.before, data, sigma);
+      std::vector<EffectSetFit> pairs;
+      for (std::size_t k = 0; k < std::min(kPairs, ranked.size()); ++k) {
+        const EffectSetFit& fa = screened[ranked[k].first];
+        const EffectSetFit& fb = screened[ranked[k].second];
+        progress("fitting " + candidate_library()[fa.candidates[0]].name + " + " + candidate_library()[fb.candidates[0]].name,
+                 (2.0 + static_cast<double>(kRefined + k)) / total_fits);
+        std::vector<double> start;
+        std::vector<nlohmann::json> held{fa.held[0], fb.held[0]};
+        std::size_t at = 0;
+        for (const EffectSetFit* f : {&fa, &fb})
+          for (const FittedParameter& p : candidate_library()[f->candidates[0]].parameters) {
+            // Sigmoid mobility's angles come from its screening, not from the linear step.
+            const bool angle = p.key.rfind("direction_", 0) == 0;
+            const double neutral = angle ? f->values[static_cast<std::size_t>(&p - candidate_library()[f->candidates[0]].parameters.data())] : p.neutral;
+            start.push_back(std::clamp(neutral + (angle ? 0.0 : ranked[k].step[at]), p.lo, p.hi));
+            ++at;
+          }
+        pairs.push_back(fit_effect_set({fa.candidates[0], fb.candidates[0]}, evaluator, data, result.before, sigma, &start, &held, 3));
+      }
+      // A pair whose member stayed at its neutral values is that member's partner alone (the
+      // neutral effect changes nothing): it competes as a single effect.
+      for (EffectSetFit& p : pairs) {
+        if (!p.ok) continue;
+        std::size_t at = 0;
+        for (std::size_t k = 0; k < 2; ++k) {
+          const Candidate& c = candidate_library()[p.candidates[k]];
+          bool neutral = true;
+          for (std::size_t j = 0; j < c.parameters.size(); ++j)
+            if (c.parameters[j].key.rfind("direction_", 0) != 0 &&
+                std::abs(p.values[at + j] - c.parameters[j].neutral) > 0.5 * c.parameters[j].step)
+              neutral = false;
+          if (neutral) {
+            const std::size_t other = 1 - k;
+            const std::size_t other_at = other == 0 ? 0 : candidate_library()[p.candidates[0]].parameters.size();
+            const std::size_t n = candidate_library()[p.candidates[other]].parameters.size();
+            EffectSetFit single;
+            single.candidates = {p.candidates[other]};
+            single.held = {p.held[other]};
+            single.values.assign(p.values.begin() + static_cast<std::ptrdiff_t>(other_at),
+                                 p.values.begin() + static_cast<std::ptrdiff_t>(other_at + n));
+            single.effects = nlohmann::json::array({p.effects[other]});
+            single.prediction = p.prediction;
+            single.training_cost = p.training_cost;
+            single.held_out_cost = p.held_out_cost;
+            single.bic = bic_of(data, p.prediction, sigma, n);
+            single.iterations = p.iterations;
+            single.ok = true;
+            p = std::move(single);
+            break;
+          }
+          at += c.parameters.size();
+        }
+      }
+      // Singles that came out of pairs replace the same effect's fit where they are better.
+      for (auto it = pairs.begin(); it != pairs.end();) {
+        if (it->candidates.size() == 1) {
+          for (EffectSetFit& f : result.candidates)
+            if (f.candidates == it->candidates && it->held_out_cost < f.held_out_cost) f = *it;
+          it = pairs.erase(it);
+        } else {
+          ++it;
+        }
+      }
+      std::sort(result.candidates.begin(), result.candidates.end(), by_held_out);
+      std::sort(pairs.begin(), pairs.end(), by_held_out);
+      const bool single_now_explains = share_of(result.candidates[best_single]) >= options.min_share;
+      const EffectSetFit& single = result.candidates[best_single];
+      const bool pair_better = !pairs.empty() && share_of(pairs.front()) >= options.min_share &&
+                               pairs.front().bic < single.bic &&
+                               share_of(pairs.front()) - share_of(single) >= kPairGain;
+      for (EffectSetFit& p : pairs) result.candidates.push_back(std::move(p));
+      std::stable_sort(result.candidates.begin(), result.candidates.end(), by_held_out);
+      for (std::size_t k = 0; k < result.candidates.size(); ++k) {
+        const EffectSetFit& f = result.candidates[k];
+        if (pair_better ? f.candidates.size() == 2 : (single_now_explains && f.candidates.size() == 1)) {
+          chosen_index = k;
+          break;
+        }
+      }
+    }
+    if (chosen_index) {
+      verdict = "named";
+      progress("uncertainty of the named effects", 1.0 - 1.0 / total_fits);
+      add_uncertainty(result.candidates[*chosen_index], evaluator, data, sigma);
+      chosen = &result.candidates[*chosen_index];
+    } else {
+      verdict = "unexplained";
+    }
+  }
+  progress("report", 1.0);
+  result.after = chosen != nullptr ? chosen->prediction : result.before;
+
+  // model.json: the input model with the named effects appended.
+  result.model = model;
+  if (chosen != nullptr) {
+    nlohmann::json effects = result.model.contains("truth_effects") ? result.model["truth_effects"] : nlohmann::json::array();
+    for (const auto& e : chosen->effects) effects.push_back(e);
+    result.model["truth_effects"] = effects;
+  }
+
+  Json& r = result.report;
+  r["recording"] = data.source;
+  r["model"] = options.model_source;
+  r["verdict"] = verdict;
+  Json effects = Json::array();
+  const double cost_after = chosen != nullptr ? chosen->held_out_cost : cost_before;
+  if (chosen != nullptr) {
+    for (std::size_t k = 0; k < chosen->candidates.size(); ++k) {
+      const Candidate& c = candidate_library()[chosen->candidates[k]];
+      double share = share_explained(cost_before, cost_after, floor);
+      if (chosen->candidates.size() > 1) {
+        // Its own share: what the pair explains beyond the other effect alone.
+        for (const EffectSetFit& f : result.candidates)
+          if (f.candidates.size() == 1 && f.candidates[0] != chosen->candidates[k])
+            if (std::find(chosen->candidates.begin(), chosen->candidates.end(), f.candidates[0]) != chosen->candidates.end())
+              share = share_explained(cost_before, cost_after, floor) - share_explained(cost_before, f.held_out_cost, floor);
+      }
+      Json regions = Json::array();
+      const Json by_region = rmse_by_region(data, result.before, result.after);
+      for (const auto& [region, outputs] : by_region.items()) {
+        const Json& m = outputs.contains(output_name(data.outputs[most_affected].id)) ? outputs[output_name(data.outputs[most_affected].id)] : Json();
+        if (!m.is_null() && m["before"].get<double>() > options.significance * sigma[most_affected] &&
+            m["after"].get<double>() < 0.5 * m["before"].get<double>())
+          regions.push_back(region);
+      }
+      effects.push_back({{"name", c.name},
+                         {"parameters", effect_parameters(*chosen, k)},
+                         {"where", {{"acts", c.acts}, {"regions_where_it_closes_the_gap", regions}}},
+                         {"share_explained", share},
+                         {"entry", chosen->effects[k]}});
+    }
+  }
+  r["effects"] = effects;
+  r["rmse_before"] = rmse_per_output(data, result.before, SampleSet::held_out);
+  r["rmse_after"] = rmse_per_output(data, result.after, SampleSet::held_out);
+  const double before_most = rms_error(data, result.before, most_affected, SampleSet::held_out);
+  const double after_most = rms_error(data, result.after, most_affected, SampleSet::held_out);
+  r["most_affected_output"] = {{"name", output_name(data.outputs[most_affected].id)},
+                               {"held_out_rmse_before", before_most},
+                               {"held_out_rmse_after", after_most},
+                               {"reduction", before_most > 0 ? 1.0 - after_most / before_most : 0.0}};
+  r["rmse_by_region"] = rmse_by_region(data, result.before, result.after);
+  r["significance"] = {{"threshold_rms_over_noise", options.significance}, {"outputs", significance}};
+  r["held_out"] = {{"blocks", kBlocks}, {"held_out_blocks", {1, 4, 7}},
+                   {"rule", "the drive's span in 10 equal blocks; blocks 1, 4, 7 held out (residuals are autocorrelated)"}};
+  Json candidates = Json::array();
+  for (const EffectSetFit& f : result.candidates) {
+    Json params = Json::array();
+    if (f.ok)
+      for (std::size_t k = 0; k < f.candidates.size(); ++k) params.push_back(effect_parameters(f, k));
+    candidates.push_back({{"effects", names_of(f)},
+                          {"ok", f.ok},
+                          {"failure", f.ok ? Json(nullptr) : Json(f.failure)},
+                          {"parameters", params},
+                          {"training_cost", f.training_cost},
+                          {"held_out_cost", f.held_out_cost},
+                          {"bic", f.bic},
+                          {"share_explained", f.ok ? share_explained(cost_before, f.held_out_cost, floor) : 0.0},
+                          {"iterations", f.iterations}});
+  }
+  r["candidates"] = candidates;
+  r["baseline"] = {{"held_out_cost", cost_before}, {"noise_floor_cost", floor},
+                   {"bic", bic_of(data, result.before, sigma, 0)}};
+  r["location"] = locate(data, result.before, sigma, options.significance);
+  r["recording_span_s"] = {data.start_s, data.end_s};
+  r["model_runs"] = evaluator.runs();
+  r["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return result;
+}
+
+}  // namespace scopekin::discrepancy

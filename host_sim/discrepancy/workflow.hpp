@@ -1,0 +1,46 @@
+#pragma once
+// The discrepancy workflow (README "Discrepancy workflow"): simulate the recording's hand motion
+// with the model, locate where model and measurement disagree beyond the sensor noise, fit each
+// candidate effect (then pairs of the best three) on the training blocks, judge them on the
+// held-out blocks, and give a verdict:
+//   none        no output's held-out RMS error exceeds `significance` times its noise;
+//   named       the best single effect explains at least `min_share` of the held-out excess
+//               error; if it leaves an output significant, the best pair is tried and named
+//               instead when it explains min_share, beats the single's BIC and explains 5 % more;
+//   unexplained otherwise (no single effect or pair explains min_share): the candidates are
+//               reported, none is named.
+// "Excess error" is the held-out normalised cost minus what the noise alone gives (1 per output).
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/fit.hpp"
+
+namespace scopekin::discrepancy {
+
+struct WorkflowOptions {
+  nlohmann::json model;                 ///< the current model (default_model() if not given)
+  std::string model_source = "default model";
+  unsigned threads = 2;
+  double significance = 2.0;            ///< held-out RMS error / noise above which an output disagrees
+  double min_share = 0.75;              ///< of the excess error a named effect must explain
+  /// Stage text and overall fraction done, now and then.
+  std::function<void(const std::string&, double)> progress;
+};
+
+struct WorkflowResult {
+  nlohmann::ordered_json report;        ///< report.json
+  nlohmann::json model;                 ///< model.json: the input model with the named effects added
+  ModelPrediction before;               ///< the model as given
+  ModelPrediction after;                ///< with the named effects (= before unless named)
+  std::vector<EffectSetFit> candidates; ///< every fit, best first (held-out cost)
+};
+
+/// Throws model::ModelError for a model that cannot be built; a model that cannot follow the
+/// recording (the run fails) throws DiscrepancyInputError saying where.
+WorkflowResult run_discrepancy(const BenchData& data, const WorkflowOptions& options);
+
+}  // namespace scopekin::discrepancy

@@ -1,0 +1,122 @@
+// The discrepancy workflow's data handling (host_sim/discrepancy/): what it takes from a
+// recording and refuses, the noise estimate, the blocked hold-out and the phases. Expected
+// numbers are independent of the code: a known noise SD, hand-made recordings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "host_sim/discrepancy/analysis.hpp"
+#include "host_sim/discrepancy/bench_data.hpp"
+
+namespace scopekin::discrepancy {
+namespace {
+
+/// A recording of `seconds`: the encoder at 1 kHz advancing 20 mm/s from 20 mm (a roll of
+/// 0.1 rad/s from 10 s), the EM tip at every 33rd ms on a line plus N(0, sd) per axis.
+recording::Recording make_recording(double seconds, double em_sd_mm, unsigned seed = 3) {
+  std::mt19937 engine(seed);
+  std::normal_distribution<double> noise(0.0, em_sd_mm);
+  recording::Recording rec;
+  const auto ms = static_cast<std::int64_t>(seconds * 1000.0);
+  for (std::int64_t t = 1; t <= ms; ++t) {
+    recording::RecordingRow row;
+    row.time_us = t * 1000;
+    const double s = static_cast<double>(t) * 1e-3;
+    row.insertion_roll = recording::InsertionRollCells{20.0 + 20.0 * s, s > 10.0 ? 0.1 * (s - 10.0) : 0.0};
+    row.handle = recording::ForceTorqueCells{1.0, 0.0};
+    if (t % 33 == 0) {
+      recording::EmPoseCells pose;
+      pose.position_mm = {20.0 * s + noise(engine), 5.0 + noise(engine), -3.0 + noise(engine)};
+      row.em[static_cast<std::size_t>(recording::EmSlot::tip)] = pose;
+    }
+    rec.rows.push_back(row);
+  }
+  return rec;
+}
+
+std::string refusal(const recording::Recording& rec) {
+  try {
+    (void)extract_bench_data(rec, "r.csv");
+  } catch (const DiscrepancyInputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DiscrepancyBenchData, TakesTheDriveAndTheOutputsItHas) {
+  const BenchData d = extract_bench_data(make_recording(20.0, 0.5), "r.csv");
+  EXPECT_EQ(d.drive.size(), 20000u);
+  EXPECT_DOUBLE_EQ(d.start_s, 0.001);
+  EXPECT_DOUBLE_EQ(d.initial_insertion_mm, 20.02);
+  EXPECT_NEAR(d.insertion_at(10.0), 220.0, 1e-9);
+  EXPECT_NEAR(d.roll_at(12.0), 0.2, 1e-9);
+  // The tip's EM position (606 samples) and the handle force and torque, thinned to every 33 ms.
+  ASSERT_EQ(d.outputs.size(), 3u);
+  EXPECT_EQ(d.outputs[0].id, OutputId::tip_position);
+  EXPECT_EQ(d.outputs[0].time_s.size(), 606u);
+  EXPECT_EQ(d.outputs[1].id, OutputId::handle_force);
+  EXPECT_EQ(d.outputs[1].time_s.size(), 607u);
+}
+
+TEST(DiscrepancyBenchData, RefusesWhatCannotDriveOrBeCompared) {
+  recording::Recording no_encoder = make_recording(20.0, 0.5);
+  for (auto& row : no_encoder.rows) row.insertion_roll.reset();
+  EXPECT_NE(refusal(no_encoder).find("no handle motion"), std::string::npos) << refusal(no_encoder);
+
+  recording::Recording metres = make_recording(20.0, 0.5);
+  for (auto& row : metres.rows) row.insertion_roll->insertion_mm /= 1000.0;
+  EXPECT_NE(refusal(metres).find("metres instead of millimetres"), std::string::npos) << refusal(metres);
+
+  recording::Recording degrees = make_recording(20.0, 0.5);
+  for (auto& row : degrees.rows) row.insertion_roll->roll_rad *= 180.0 / M_PI * 10.0;
+  EXPECT_NE(refusal(degrees).find("degrees instead of radians"), std::string::npos) << refusal(degrees);
+
+  EXPECT_NE(refusal(make_recording(10.0, 0.5)).find("too short to hold data out"), std::string::npos);
+
+  recording::Recording no_outputs = make_recording(20.0, 0.5);
+  for (auto& row : no_outputs.rows) row.em = {};
+  EXPECT_NE(refusal(no_outputs).find("no measured output"), std::string::npos) << refusal(no_outputs);
+
+  recording::Recording millinewtons = make_recording(20.0, 0.5);
+  for (auto& row : millinewtons.rows) row.handle->force_N = 1000.0;
+  EXPECT_NE(refusal(millinewtons).find("needs newtons"), std::string::npos) << refusal(millinewtons);
+}
+
+TEST(DiscrepancyAnalysis, NoiseEstimateRecoversAKnownSd) {
+  // Three axes of N(0, 0.5 mm) on a straight line: the combined SD is 0.5 sqrt(3) = 0.866 mm.
+  const BenchData d = extract_bench_data(make_recording(60.0, 0.5, 7), "r.csv");
+  const std::vector<double> sigma = estimate_noise(d);
+  EXPECT_NEAR(sigma[0], 0.5 * std::sqrt(3.0), 0.05 * 0.866);
+  // A constant handle force has no noise to estimate: not assessed.
+  EXPECT_EQ(sigma[1], 0.0);
+  EXPECT_FALSE(assessable(sigma, 1));
+}
+
+TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
+  const BenchData d = extract_bench_data(make_recording(20.0, 0.5), "r.csv");
+  // 20 s in 10 blocks of ~2 s; blocks 1, 4 and 7 are held out.
+  EXPECT_EQ(block_of(d, 0.5), 0);
+  EXPECT_EQ(block_of(d, 3.0), 1);
+  EXPECT_EQ(block_of(d, 19.99), 9);
+  EXPECT_TRUE(in_set(d, 3.0, SampleSet::held_out));
+  EXPECT_TRUE(in_set(d, 9.5, SampleSet::held_out));
+  EXPECT_TRUE(in_set(d, 5.0, SampleSet::training));
+  EXPECT_EQ(phase_at(d, 5.0), "push");
+  EXPECT_EQ(phase_at(d, 15.0), "twist");
+  // A model that predicts the measurement exactly: zero error.
+  ModelPrediction exact;
+  exact.ok = true;
+  for (const MeasuredSeries& m : d.outputs) exact.outputs.push_back(m.value);
+  EXPECT_EQ(rms_error(d, exact, 0, SampleSet::all), 0.0);
+  // One 3 mm off everywhere: RMS 3 mm; in units of a 0.866 mm noise over both sets, 3/0.866.
+  ModelPrediction shifted = exact;
+  for (auto& v : shifted.outputs[0]) v.x() += 3.0;
+  EXPECT_NEAR(rms_error(d, shifted, 0, SampleSet::held_out), 3.0, 1e-12);
+  const std::vector<double> sigma{0.866, 0.0, 0.0};
+  EXPECT_NEAR(normalised_residuals(d, shifted, sigma, SampleSet::training).squaredNorm(), std::pow(3.0 / 0.866, 2), 1e-9);
+}
+
+}  // namespace
+}  // namespace scopekin::discrepancy
