@@ -7,6 +7,7 @@
 #include <string>
 
 #include "host_sim/cli/cli_support.hpp"
+#include "host_sim/discrepancy/static_cantilever.hpp"
 #include "host_sim/discrepancy/workflow.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "model/io/strict_json.hpp"
@@ -25,7 +26,28 @@ struct DiscrepancyOptions {
   unsigned threads = 2;
   bool quiet = false;
   bool plots = true;
+  bool thesis_cantilever = false;
 };
+
+/// The static real-data case (README "Discrepancy workflow"): report.json and report.md.
+int run_thesis_cantilever_case(const DiscrepancyOptions& o) {
+  try {
+    const fs::path dir(o.out);
+    prepare_directory(dir, {"report.json", "report.md"});
+    if (!o.quiet) std::fprintf(stderr, "fitting the four candidates, each also nine times with one point left out ...\n");
+    const discrepancy::CantileverReport r = discrepancy::run_thesis_cantilever();
+    write_json(dir / "report.json", r.json);
+    std::ofstream md(dir / "report.md");
+    md << r.markdown;
+    if (!md) throw OutputError("cannot write " + (dir / "report.md").string());
+    std::printf("%s", r.markdown.c_str());
+    std::printf("wrote report.json, report.md into %s\n", dir.string().c_str());
+    return 0;
+  } catch (const OutputError& e) {
+    std::cerr << "scopekin discrepancy: " << e.what() << "\n";
+    return 3;
+  }
+}
 
 /// report.md: the verdict, the effects, the errors before and after, the candidates' scores.
 std::string report_markdown(const Json& r) {
@@ -80,6 +102,11 @@ std::string report_markdown(const Json& r) {
 }
 
 int run_discrepancy_command(const DiscrepancyOptions& o) {
+  if (o.thesis_cantilever != o.recording.empty()) {
+    std::cerr << "scopekin discrepancy: give a recording or --thesis-cantilever (one of them)\n";
+    return 2;
+  }
+  if (o.thesis_cantilever) return run_thesis_cantilever_case(o);
   recording::Recording rec;
   try {
     rec = recording::RecordingReader().read_file(o.recording);
@@ -180,11 +207,14 @@ void add_discrepancy_command(CLI::App& app) {
       "estimated from the data, fits each candidate effect (then pairs) on training blocks and judges them on held-out "
       "blocks. Writes DIR/report.json (verdict named/none/unexplained, effects with fitted parameters, units and SDs, "
       "RMS errors before and after), DIR/report.md with plots, DIR/model.json (the model with the named effects: a "
-      "scenario can use it with \"model\": \"DIR/model.json\") and DIR/series.csv. Exit status 0 done, 2 a recording "
+      "scenario can use it with \"model\": \"DIR/model.json\") and DIR/series.csv. With --thesis-cantilever, the "
+      "thesis's measured cantilever as a static case instead (report.json, report.md). Exit status 0 done, 2 a recording "
       "or model it cannot use (the message says what is needed), 3 an output cannot be written.");
   cmd->add_option("recording", options->recording, "Recording CSV file (README 'Recording schema')")
-      ->required()
       ->check(CLI::ExistingFile);
+  cmd->add_flag("--thesis-cantilever", options->thesis_cantilever,
+                "Instead of a recording: the static real-data case, the thesis's measured cantilever (Table 4.2): one EI "
+                "against EI along the scope (with and without the clamp's pitch), scored leaving one point out");
   cmd->add_option("--model", options->model,
                   "The current model: a scenario file without procedure (colon, scope, solver, truth_effects); default: "
                   "the default colon and the CF-Q160L, no effects")

@@ -30,10 +30,21 @@ Eigen::Matrix3d pitch_rotation(double pitch_rad) {
 }  // namespace
 
 Result simulate(double ei, double weight, double clamp_pitch_deg, int elements) {
-  const BeamSection section = cf_q160l::section(ei, weight);
+  return simulate_profile(ei, ei, weight, clamp_pitch_deg, elements);
+}
+
+Result simulate_profile(double ei_clamp, double ei_tip, double weight, double clamp_pitch_deg, int elements) {
   const double pitch_rad = clamp_pitch_deg * M_PI / 180.0;
-  ScopeBeam beam = straight_beam(Eigen::Vector3d::Zero(), Eigen::Vector3d(std::cos(pitch_rad), std::sin(pitch_rad), 0.0),
-                                 kFreeLength_mm, static_cast<std::size_t>(elements), section);
+  const Eigen::Vector3d direction(std::cos(pitch_rad), std::sin(pitch_rad), 0.0);
+  std::vector<Eigen::Vector3d> nodes;
+  std::vector<BeamSection> sections;
+  for (int i = 0; i <= elements; ++i) nodes.push_back(direction * (kFreeLength_mm * i / elements));
+  for (int i = 0; i < elements; ++i) {
+    // Linear in the distance from the clamp, at the element's midpoint.
+    const double s = (static_cast<double>(i) + 0.5) / static_cast<double>(elements);
+    sections.push_back(cf_q160l::section((1.0 - s) * ei_clamp + s * ei_tip, weight));
+  }
+  ScopeBeam beam(std::move(nodes), std::move(sections));
   BeamLoads loads;
   loads.gravity_mm_per_s2 = Eigen::Vector3d(0.0, -kGravity_mm_per_s2, 0.0);
   NodeSupport clamp;  // the clamp holds node 0 at the origin in its reference orientation

@@ -42,6 +42,11 @@ struct Result {
 Result simulate(double bending_stiffness_Nmm2, double weight_per_length_N_per_mm, double clamp_pitch_deg = 0.0,
                 int elements = 80);
 
+/// The same with EI varying linearly along the 800 mm, from `ei_clamp` at the clamp to `ei_tip`
+/// at the free (distal) end [N mm^2], taken at each element's midpoint.
+Result simulate_profile(double ei_clamp, double ei_tip, double weight_per_length_N_per_mm, double clamp_pitch_deg = 0.0,
+                        int elements = 80);
+
 /// Fitted parameters. Under self weight the shape depends on EI / w only (w = weight per
 /// length), so EI and w cannot be identified separately; EI is reported at App. B's weight.
 /// The clamp's pitch was not recorded by the thesis; a photograph (Fig. 4.13) shows a hand clamp.
