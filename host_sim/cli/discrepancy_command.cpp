@@ -202,7 +202,7 @@ void add_discrepancy_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "discrepancy",
       "Find where a model and a recording disagree and name the missing physical effect (README 'Discrepancy "
-      "workflow'): drives the model with the recording's insertion and roll, compares the measured outputs (EM poses "
+      "workflow'): drives the model with the recording's insertion and roll, compares the measured outputs (EM positions "
       "of the tip, the 20 cm point and the sigmoid, the tip force, the handle force and torque) against the noise "
       "estimated from the data, fits each candidate effect (then pairs) on training blocks and judges them on held-out "
       "blocks. Writes DIR/report.json (verdict named/none/unexplained, effects with fitted parameters, units and SDs, "

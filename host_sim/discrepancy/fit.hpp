@@ -62,7 +62,7 @@ struct EffectSetFit {
 EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator& evaluator, const BenchData& data,
                             const ModelPrediction& baseline, const std::vector<double>& sigma,
                             const std::vector<double>* start = nullptr, const std::vector<nlohmann::json>* held = nullptr,
-                            int max_iterations = 4);
+                            int max_iterations = 3);
 
 /// Screening: every candidate of the library gets one Gauss-Newton step from its neutral values,
 /// with the Jacobian of all their parameters computed at the baseline (one run per parameter,

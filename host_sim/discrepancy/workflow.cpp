@@ -19,6 +19,10 @@ constexpr std::size_t kRefined = 2;
 constexpr std::size_t kPairs = 2;
 /// How much more of the excess error a pair must explain than the best single effect.
 constexpr double kPairGain = 0.05;
+/// Pairs are tried only when the best single effect explains at least this much: when no effect
+/// of the library explains anything alone, the disagreement is not theirs (and the pairs' runs
+/// are saved).
+constexpr double kMinSingleShareForPairs = 0.1;
 
 /// Share of the held-out excess error (cost above the noise floor) a fit removes, in [0, 1].
 double share_explained(double cost_before, double cost_after, double floor) {
@@ -197,7 +201,7 @@ WorkflowResult run_discrepancy(const BenchData& data, const WorkflowOptions& opt
     std::optional<std::size_t> chosen_index;
     if (single_explains && leaves_nothing_significant(result.candidates[best_single])) {
       chosen_index = best_single;
-    } else {
+    } else if (share_of(result.candidates[best_single]) >= kMinSingleShareForPairs) {
       // 3. Pairs: ranked by the linearised joint step (no run), the best kPairs refined.
       const std::vector<PairEstimate> ranked = rank_pairs_linear(screened, result.before, data, sigma);
       std::vector<EffectSetFit> pairs;

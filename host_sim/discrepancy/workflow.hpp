@@ -1,11 +1,12 @@
 #pragma once
 // The discrepancy workflow (README "Discrepancy workflow"): simulate the recording's hand motion
-// with the model, locate where model and measurement disagree beyond the sensor noise, fit each
-// candidate effect (then pairs of the best three) on the training blocks, judge them on the
-// held-out blocks, and give a verdict:
+// with the model, locate where model and measurement disagree beyond the sensor noise, fit the
+// candidate effects (screening all, refining the best; then pairs) on the training blocks, judge
+// them on the held-out blocks, and give a verdict:
 //   none        no output's held-out RMS error exceeds `significance` times its noise;
 //   named       the best single effect explains at least `min_share` of the held-out excess
-//               error; if it leaves an output significant, the best pair is tried and named
+//               error; if it leaves an output significant (and explains at least 10 %), the two
+//               pairs best by their linearised joint step are fitted, and the best is named
 //               instead when it explains min_share, beats the single's BIC and explains 5 % more;
 //   unexplained otherwise (no single effect or pair explains min_share): the candidates are
 //               reported, none is named.
