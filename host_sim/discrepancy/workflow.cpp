@@ -213,14 +213,15 @@ WorkflowResult run_discrepancy(const BenchData& data, const WorkflowOptions& opt
         std::vector<double> start;
         std::vector<nlohmann::json> held{fa.held[0], fb.held[0]};
         std::size_t at = 0;
-        for (const EffectSetFit* f : {&fa, &fb})
-          for (const FittedParameter& p : candidate_library()[f->candidates[0]].parameters) {
+        for (const EffectSetFit* f : {&fa, &fb}) {
+          const std::vector<FittedParameter>& params = candidate_library()[f->candidates[0]].parameters;
+          for (std::size_t j = 0; j < params.size(); ++j, ++at) {
             // Sigmoid mobility's angles come from its screening, not from the linear step.
-            const bool angle = p.key.rfind("direction_", 0) == 0;
-            const double neutral = angle ? f->values[static_cast<std::size_t>(&p - candidate_library()[f->candidates[0]].parameters.data())] : p.neutral;
-            start.push_back(std::clamp(neutral + (angle ? 0.0 : ranked[k].step[at]), p.lo, p.hi));
-            ++at;
+            const bool angle = params[j].key.rfind("direction_", 0) == 0;
+            const double value = angle ? f->values[j] : params[j].neutral + ranked[k].step[at];
+            start.push_back(std::clamp(value, params[j].lo, params[j].hi));
           }
+        }
         pairs.push_back(fit_effect_set({fa.candidates[0], fb.candidates[0]}, evaluator, data, result.before, sigma, &start, &held, 3));
       }
       // A pair whose member stayed at its neutral values is that member's partner alone (the
