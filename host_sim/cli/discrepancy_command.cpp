@@ -24,6 +24,7 @@ struct DiscrepancyOptions {
   std::string model;
   std::string out;
   unsigned threads = 2;
+  double fit_budget_s = discrepancy::kDefaultFitBudget_s;
   bool quiet = false;
   bool plots = true;
   bool thesis_cantilever = false;
@@ -61,8 +62,11 @@ std::string report_markdown(const Json& r) {
   md += "- recording: `" + r["recording"].get<std::string>() + "`\n";
   md += "- model: " + r["model"].get<std::string>() + "\n";
   md += "- **verdict: " + r["verdict"].get<std::string>() + "**\n";
-  md += "- model runs: " + std::to_string(r["model_runs"].get<std::size_t>()) + ", " +
-        num(r["wall_time_s"], "%.1f") + " s\n\n";
+  md += "- model runs: " + std::to_string(r["model_runs"].get<std::size_t>()) + " (" + num(r["simulated_s"], "%.0f") +
+        " recording seconds simulated), " + num(r["wall_time_s"], "%.1f") + " s\n";
+  if (r["fit_windows"]["windowed"].get<bool>())
+    md += "- fitted on windows (`fit_windows` in report.json): " + r["fit_windows"]["rule"].get<std::string>() + "\n";
+  md += "\n";
   md += "## Effects named\n\n";
   if (r["effects"].empty()) md += "None.\n";
   for (const Json& e : r["effects"]) {
@@ -116,6 +120,7 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
   }
   discrepancy::WorkflowOptions options;
   options.threads = o.threads;
+  options.fit_budget_s = o.fit_budget_s;
   try {
     if (!o.model.empty()) {
       options.model = model::io::parse_json_file(o.model);
@@ -221,6 +226,13 @@ void add_discrepancy_command(CLI::App& app) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out, "Output directory (created if missing; old outputs in it are replaced)")->required();
   cmd->add_option("--threads", options->threads, "Model runs in parallel")->default_val(2)->check(CLI::Range(1, 64));
+  cmd->add_option("--fit-budget-s", options->fit_budget_s,
+                  "Recording seconds one fit run simulates at most (at least 80: ten windows of 3 s spin-up and 5 s "
+                  "scored; shorter windows were measured to mislead the fits). A longer recording is fitted on one "
+                  "window per block, restarted from the model-as-given run's state; the effects finally named are "
+                  "checked over the whole recording")
+      ->default_val(discrepancy::kDefaultFitBudget_s)
+      ->check(CLI::Range(discrepancy::kMinFitBudget_s, 100000.0));
   cmd->add_flag("--no-plots", [options](std::int64_t) { options->plots = false; }, "Write no PNG (the CSV and JSON only)");
   cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
   cmd->callback([options]() { throw CLI::RuntimeError(run_discrepancy_command(*options)); });

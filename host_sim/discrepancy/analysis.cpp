@@ -17,6 +17,13 @@ bool is_held_out_block(int block) { return block % 3 == 1; }
 
 bool in_set(const BenchData& data, double t, SampleSet set) {
   if (set == SampleSet::all) return true;
+  if (set == SampleSet::fit_training || set == SampleSet::fit_held_out) {
+    if (!data.fit_spans_s.empty() &&
+        std::none_of(data.fit_spans_s.begin(), data.fit_spans_s.end(),
+                     [t](const std::pair<double, double>& s) { return t >= s.first && t <= s.second; }))
+      return false;
+    set = set == SampleSet::fit_training ? SampleSet::training : SampleSet::held_out;
+  }
   return is_held_out_block(block_of(data, t)) == (set == SampleSet::held_out);
 }
 

@@ -26,7 +26,9 @@ inline constexpr int kBlocks = 10;
 int block_of(const BenchData& data, double time_s);
 bool is_held_out_block(int block);
 
-enum class SampleSet { training, held_out, all };
+/// fit_training and fit_held_out: the training / held-out samples within the fits' scored spans
+/// (BenchData::fit_spans_s; all of them when it is empty).
+enum class SampleSet { training, held_out, all, fit_training, fit_held_out };
 bool in_set(const BenchData& data, double time_s, SampleSet set);
 /// How many of an output's samples fall in a set.
 std::size_t samples_in_set(const BenchData& data, const MeasuredSeries& series, SampleSet set);

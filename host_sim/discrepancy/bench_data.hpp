@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "host_sim/recording/recording_reader.hpp"
@@ -52,6 +53,8 @@ struct BenchData {
   double end_s = 0;                      ///< the last one
   double duration_s = 0;                 ///< end_s - start_s
   double initial_insertion_mm = 0;
+  /// The spans the fits score (the windows' scored parts, fit_windows.hpp); empty = all of it.
+  std::vector<std::pair<double, double>> fit_spans_s;
   /// The tip's region at t ("" = the recording does not say).
   std::string region_at(double time_s) const;
   /// Insertion [mm] and its rate [mm/s], roll rate [rad/s] at t (linear between samples).

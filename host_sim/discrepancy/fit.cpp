@@ -10,20 +10,98 @@ namespace scopekin::discrepancy {
 Evaluator::Evaluator(nlohmann::json model, std::string model_source, const BenchData& data, unsigned threads)
     : model_(std::move(model)), source_(std::move(model_source)), data_(data), threads_(std::max(1U, threads)) {}
 
-ModelPrediction Evaluator::run(const nlohmann::json& effects) const {
+ModelPrediction Evaluator::run_baseline(std::vector<RunWindow> windows, const std::function<void(double)>& progress) {
   ++runs_;
-  return predict(model_, source_, effects, data_);
+  windows_ = std::move(windows);
+  ModelPrediction p = predict(model_, source_, nlohmann::json::array(), data_, progress, &windows_, &states_);
+  h_s_ = p.h_s;
+  simulated_steps_ += p.steps;
+  if (!p.ok) windows_.clear();
+  return p;
 }
 
-std::vector<ModelPrediction> Evaluator::run_all(const std::vector<nlohmann::json>& lists) const {
-  std::vector<ModelPrediction> out(lists.size());
-  for (std::size_t first = 0; first < lists.size(); first += threads_) {
-    std::vector<std::future<ModelPrediction>> running;
-    for (std::size_t k = first; k < std::min(lists.size(), first + threads_); ++k)
-      running.push_back(std::async(std::launch::async, [this, &lists, k] { return run(lists[k]); }));
-    for (std::size_t k = 0; k < running.size(); ++k) out[first + k] = running[k].get();
+ModelPrediction Evaluator::run_part(const nlohmann::json& effects, RunScope scope,
+                                    const std::vector<std::size_t>& which) const {
+  ModelPrediction p = scope == RunScope::full || !windowed()
+                          ? predict(model_, source_, effects, data_)
+                          : predict_windows(model_, source_, effects, data_, windows_, states_, which);
+  simulated_steps_ += p.steps;
+  return p;
+}
+
+ModelPrediction Evaluator::run(const nlohmann::json& effects, RunScope scope) const {
+  return run_all(std::vector<std::pair<nlohmann::json, RunScope>>{{effects, scope}}).front();
+}
+
+std::vector<ModelPrediction> Evaluator::run_all(const std::vector<nlohmann::json>& lists, RunScope scope) const {
+  std::vector<std::pair<nlohmann::json, RunScope>> requests;
+  for (const nlohmann::json& l : lists) requests.emplace_back(l, scope);
+  return run_all(requests);
+}
+
+std::vector<ModelPrediction> Evaluator::run_all(const std::vector<std::pair<nlohmann::json, RunScope>>& requests) const {
+  // Tasks: a full run is one task; a windowed run is split by windows into as many parts as
+  // leave no thread idle (one part each when there are at least as many runs as threads).
+  struct Task {
+    std::size_t request;
+    std::vector<std::size_t> windows;
+  };
+  std::vector<Task> tasks;
+  const std::size_t parts = std::max<std::size_t>(1, threads_ / std::max<std::size_t>(1, requests.size()));
+  for (std::size_t r = 0; r < requests.size(); ++r) {
+    ++runs_;
+    if (requests[r].second == RunScope::full || !windowed()) {
+      tasks.push_back({r, {}});
+      continue;
+    }
+    std::vector<std::size_t> which;
+    for (std::size_t w = 0; w < windows_.size(); ++w)
+      if (requests[r].second == RunScope::fit_all ||
+          is_held_out_block(windows_[w].block) == (requests[r].second == RunScope::fit_held_out))
+        which.push_back(w);
+    const std::size_t n = std::min(parts, which.size());
+    for (std::size_t part = 0; part < n; ++part) {
+      Task t{r, {}};
+      for (std::size_t k = part; k < which.size(); k += n) t.windows.push_back(which[k]);
+      tasks.push_back(std::move(t));
+    }
+  }
+  std::vector<ModelPrediction> results(tasks.size());
+  std::atomic<std::size_t> next{0};
+  auto worker = [&] {
+    for (std::size_t k = next++; k < tasks.size(); k = next++)
+      results[k] = run_part(requests[tasks[k].request].first, requests[tasks[k].request].second, tasks[k].windows);
+  };
+  std::vector<std::future<void>> workers;
+  for (unsigned w = 0; w < std::min<std::size_t>(threads_, tasks.size()); ++w)
+    workers.push_back(std::async(std::launch::async, worker));
+  for (auto& w : workers) w.get();
+  // Parts of one windowed run fill disjoint samples: merge them.
+  std::vector<ModelPrediction> out(requests.size());
+  std::vector<bool> seen(requests.size(), false);
+  for (std::size_t k = 0; k < tasks.size(); ++k) {
+    ModelPrediction& into = out[tasks[k].request];
+    ModelPrediction& part = results[k];
+    if (!seen[tasks[k].request]) {
+      into = std::move(part);
+      seen[tasks[k].request] = true;
+      continue;
+    }
+    if (!into.ok) continue;
+    if (!part.ok) {
+      into = std::move(part);
+      continue;
+    }
+    merge_outputs(part, into);
   }
   return out;
+}
+
+void merge_outputs(const ModelPrediction& from, ModelPrediction& into) {
+  into.steps += from.steps;
+  for (std::size_t o = 0; o < into.outputs.size() && o < from.outputs.size(); ++o)
+    for (std::size_t i = 0; i < into.outputs[o].size(); ++i)
+      if (!std::isnan(from.outputs[o][i].x())) into.outputs[o][i] = from.outputs[o][i];
 }
 
 namespace {
@@ -69,8 +147,8 @@ struct Point {
 }  // namespace
 
 double bic_of(const BenchData& data, const ModelPrediction& p, const std::vector<double>& sigma, std::size_t parameters) {
-  const Eigen::VectorXd r = normalised_residuals(data, p, sigma, SampleSet::training)
-                                .cwiseProduct(sqrt_counts(data, sigma, SampleSet::training));
+  const Eigen::VectorXd r = normalised_residuals(data, p, sigma, SampleSet::fit_training)
+                                .cwiseProduct(sqrt_counts(data, sigma, SampleSet::fit_training));
   const double n = static_cast<double>(std::max<Eigen::Index>(r.size(), 1));
   return n * std::log(std::max(r.squaredNorm(), 1e-300) / n) + static_cast<double>(parameters) * std::log(n);
 }
@@ -106,7 +184,7 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
     pt.x = std::move(x);
     pt.prediction = std::move(p);
     if (pt.prediction.ok) {
-      pt.r = normalised_residuals(data, pt.prediction, sigma, SampleSet::training);
+      pt.r = normalised_residuals(data, pt.prediction, sigma, SampleSet::fit_training);
       pt.cost = pt.r.squaredNorm();
     }
     return pt;
@@ -117,7 +195,7 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
   // The neutral point is the baseline itself (the effects vanish there).
   Point current = make_point(x0, baseline);
   if (start != nullptr && start->size() == P && *start != x0) {
-    Point from = make_point(*start, evaluator.run(entries(*start)));
+    Point from = make_point(*start, evaluator.run(entries(*start), RunScope::fit_training));
     if (from.cost < current.cost) current = std::move(from);
   }
   double lambda = 1e-2;
@@ -126,7 +204,7 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
     // Jacobian columns.
     const DifferenceRuns differences = forward_differences(current.x, params, entries);
     const std::vector<double>& h = differences.h;
-    const std::vector<ModelPrediction> columns = evaluator.run_all(differences.lists);
+    const std::vector<ModelPrediction> columns = evaluator.run_all(differences.lists, RunScope::fit_training);
     Eigen::MatrixXd J(current.r.size(), static_cast<Eigen::Index>(P));
     bool usable = true;
     for (std::size_t j = 0; j < P; ++j) {
@@ -135,7 +213,7 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
         break;
       }
       J.col(static_cast<Eigen::Index>(j)) =
-          (normalised_residuals(data, columns[j], sigma, SampleSet::training) - current.r) / h[j];
+          (normalised_residuals(data, columns[j], sigma, SampleSet::fit_training) - current.r) / h[j];
     }
     if (!usable) {
       fit.failure = "a model run for the Jacobian failed";
@@ -155,7 +233,7 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
         x[j] = std::clamp(x[j] + delta[static_cast<Eigen::Index>(j)], params[j].lo, params[j].hi);
         relative_step = std::max(relative_step, std::abs(x[j] - current.x[j]) / params[j].step);
       }
-      Point trial = make_point(x, evaluator.run(entries(x)));
+      Point trial = make_point(x, evaluator.run(entries(x), RunScope::fit_training));
       if (trial.cost < current.cost) {
         const double gain = current.cost - trial.cost;
         current = std::move(trial);
@@ -177,9 +255,19 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
     if (fit.failure.empty()) fit.failure = current.prediction.failure;
     return fit;
   }
+  if (evaluator.windowed() && current.x != x0) {
+    // The trials ran the training windows only: the held-out windows at the fit.
+    const ModelPrediction held_out = evaluator.run(fit.effects, RunScope::fit_held_out);
+    if (!held_out.ok) {
+      fit.ok = false;
+      fit.failure = held_out.failure;
+      return fit;
+    }
+    merge_outputs(held_out, fit.prediction);
+  }
   fit.training_cost = current.cost;
-  fit.held_out_cost = normalised_residuals(data, current.prediction, sigma, SampleSet::held_out).squaredNorm();
-  fit.bic = bic_of(data, current.prediction, sigma, P);
+  fit.held_out_cost = normalised_residuals(data, fit.prediction, sigma, SampleSet::fit_held_out).squaredNorm();
+  fit.bic = bic_of(data, fit.prediction, sigma, P);
 
   return fit;
 }
@@ -218,15 +306,15 @@ void add_uncertainty(EffectSetFit& fit, const Evaluator& evaluator, const BenchD
   const DifferenceRuns differences =
       forward_differences(fit.values, params, [&](const std::vector<double>& x) { return entries_of(fit, x); });
   const std::vector<double>& h = differences.h;
-  const std::vector<ModelPrediction> columns = evaluator.run_all(differences.lists);
-  const Eigen::VectorXd s = sqrt_counts(data, sigma, SampleSet::training);
-  const Eigen::VectorXd r0 = normalised_residuals(data, fit.prediction, sigma, SampleSet::training);
+  const std::vector<ModelPrediction> columns = evaluator.run_all(differences.lists, RunScope::fit_training);
+  const Eigen::VectorXd s = sqrt_counts(data, sigma, SampleSet::fit_training);
+  const Eigen::VectorXd r0 = normalised_residuals(data, fit.prediction, sigma, SampleSet::fit_training);
   const Eigen::VectorXd r = r0.cwiseProduct(s);
   Eigen::MatrixXd J(r.size(), static_cast<Eigen::Index>(P));
   for (std::size_t j = 0; j < P; ++j) {
     if (!columns[j].ok) return;
     J.col(static_cast<Eigen::Index>(j)) =
-        (normalised_residuals(data, columns[j], sigma, SampleSet::training) - r0).cwiseProduct(s) / h[j];
+        (normalised_residuals(data, columns[j], sigma, SampleSet::fit_training) - r0).cwiseProduct(s) / h[j];
   }
   const double n = static_cast<double>(r.size());
   double rho = 0.0;
@@ -240,7 +328,7 @@ void add_uncertainty(EffectSetFit& fit, const Evaluator& evaluator, const BenchD
 
 std::vector<PairEstimate> rank_pairs_linear(const std::vector<EffectSetFit>& screened, const ModelPrediction& baseline,
                                             const BenchData& data, const std::vector<double>& sigma) {
-  const Eigen::VectorXd r0 = normalised_residuals(data, baseline, sigma, SampleSet::training);
+  const Eigen::VectorXd r0 = normalised_residuals(data, baseline, sigma, SampleSet::fit_training);
   std::vector<PairEstimate> out;
   for (std::size_t a = 0; a < screened.size(); ++a)
     for (std::size_t b = a + 1; b < screened.size(); ++b) {
@@ -262,6 +350,25 @@ std::vector<PairEstimate> rank_pairs_linear(const std::vector<EffectSetFit>& scr
   std::sort(out.begin(), out.end(),
             [](const PairEstimate& x, const PairEstimate& y) { return x.linear_training_cost < y.linear_training_cost; });
   return out;
+}
+
+double best_partner_gain(const EffectSetFit& single, const std::vector<EffectSetFit>& screened, const BenchData& data,
+                         const std::vector<double>& sigma, double noise_floor_cost) {
+  if (!single.ok) return 0.0;
+  const Eigen::VectorXd r = normalised_residuals(data, single.prediction, sigma, SampleSet::fit_training);
+  const double cost = r.squaredNorm();
+  const double excess = cost - noise_floor_cost;
+  if (!(excess > 0.0)) return 0.0;
+  double best = 0.0;
+  for (const EffectSetFit& other : screened) {
+    if (other.candidates == single.candidates || other.neutral_jacobian.rows() != r.size()) continue;
+    const Eigen::MatrixXd& J = other.neutral_jacobian;
+    Eigen::MatrixXd A = J.transpose() * J;
+    for (Eigen::Index k = 0; k < A.rows(); ++k) A(k, k) += 1e-9 + 1e-6 * A(k, k);
+    const Eigen::VectorXd delta = A.ldlt().solve(-J.transpose() * r);
+    best = std::max(best, (cost - (r + J * delta).squaredNorm()) / excess);
+  }
+  return best;
 }
 
 namespace {
@@ -301,12 +408,12 @@ SigmoidFit fit_sigmoid_direction(const Evaluator& evaluator, const BenchData& da
       lists.push_back(nlohmann::json::array({sigmoid->entry(
           part == 0 ? std::vector<double>{step, 0.0, polar, azimuth} : std::vector<double>{0.0, step, polar, azimuth}, held)}));
     }
-  const std::vector<ModelPrediction> runs = evaluator.run_all(lists);
+  const std::vector<ModelPrediction> runs = evaluator.run_all(lists, RunScope::fit_training);
   Eigen::MatrixXd J(r0.size(), 6);
   for (int k = 0; k < 6; ++k) {
     if (!runs[static_cast<std::size_t>(k)].ok) return out;
     // Column order: (u_x, v_x, u_y, v_y, u_z, v_z).
-    J.col(k) = (normalised_residuals(data, runs[static_cast<std::size_t>(k)], sigma, SampleSet::training) - r0) / step;
+    J.col(k) = (normalised_residuals(data, runs[static_cast<std::size_t>(k)], sigma, SampleSet::fit_training) - r0) / step;
   }
   Eigen::MatrixXd A = J.transpose() * J;
   for (Eigen::Index k = 0; k < 6; ++k) A(k, k) += 1e-9 + 1e-6 * A(k, k);
@@ -341,7 +448,7 @@ SigmoidFit fit_sigmoid_direction(const Evaluator& evaluator, const BenchData& da
 std::vector<EffectSetFit> screen_candidates(const Evaluator& evaluator, const BenchData& data,
                                             const ModelPrediction& baseline, const std::vector<double>& sigma) {
   const std::vector<Candidate>& library = candidate_library();
-  const Eigen::VectorXd r0 = normalised_residuals(data, baseline, sigma, SampleSet::training);
+  const Eigen::VectorXd r0 = normalised_residuals(data, baseline, sigma, SampleSet::fit_training);
   std::vector<EffectSetFit> fits(library.size());
   std::vector<nlohmann::json> lists;
   std::vector<std::pair<std::size_t, std::size_t>> column_of;  // (candidate, parameter)
@@ -363,7 +470,7 @@ std::vector<EffectSetFit> screen_candidates(const Evaluator& evaluator, const Be
       steps.push_back(h);
     }
   }
-  const std::vector<ModelPrediction> columns = evaluator.run_all(lists);
+  const std::vector<ModelPrediction> columns = evaluator.run_all(lists, RunScope::fit_training);
   std::vector<nlohmann::json> trial_lists;
   std::vector<std::size_t> trial_of;
   for (std::size_t c = 0; c < library.size(); ++c) {
@@ -378,7 +485,7 @@ std::vector<EffectSetFit> screen_candidates(const Evaluator& evaluator, const Be
         break;
       }
       J.col(static_cast<Eigen::Index>(column_of[k].second)) =
-          (normalised_residuals(data, columns[k], sigma, SampleSet::training) - r0) / steps[k];
+          (normalised_residuals(data, columns[k], sigma, SampleSet::fit_training) - r0) / steps[k];
     }
     if (!ok) continue;
     if (library[c].name == "sigmoid_mobility") {
@@ -402,7 +509,7 @@ std::vector<EffectSetFit> screen_candidates(const Evaluator& evaluator, const Be
     trial_lists.push_back(nlohmann::json::array({library[c].entry(fits[c].values, fits[c].held[0])}));
     trial_of.push_back(c);
   }
-  const std::vector<ModelPrediction> trials = evaluator.run_all(trial_lists);
+  const std::vector<ModelPrediction> trials = evaluator.run_all(trial_lists, RunScope::fit_all);
   for (std::size_t k = 0; k < trials.size(); ++k) {
     EffectSetFit& f = fits[trial_of[k]];
     f.iterations = 1;
@@ -413,8 +520,8 @@ std::vector<EffectSetFit> screen_candidates(const Evaluator& evaluator, const Be
       f.failure = trials[k].failure;
       continue;
     }
-    f.training_cost = normalised_residuals(data, f.prediction, sigma, SampleSet::training).squaredNorm();
-    f.held_out_cost = normalised_residuals(data, f.prediction, sigma, SampleSet::held_out).squaredNorm();
+    f.training_cost = normalised_residuals(data, f.prediction, sigma, SampleSet::fit_training).squaredNorm();
+    f.held_out_cost = normalised_residuals(data, f.prediction, sigma, SampleSet::fit_held_out).squaredNorm();
     f.bic = bic_of(data, f.prediction, sigma, f.values.size());
   }
   return fits;

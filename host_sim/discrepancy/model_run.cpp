@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "host_sim/simulator/world_readout.hpp"
 #include "model/scenario/scenario.hpp"
@@ -63,51 +64,130 @@ constexpr double kMaxPenetration_mm = 1.0;
 
 }  // namespace
 
-ModelPrediction predict(const nlohmann::json& model, const std::string& model_source, const nlohmann::json& extra_effects,
-                        const BenchData& data, const std::function<void(double)>& progress) {
-  const model::Scenario scenario = model::read_scenario(scenario_for_run(model, extra_effects, data), model_source);
-  std::unique_ptr<model::World> world = model::build_world(scenario);
-  host_sim::WorldReader reader(*world);
-  const double h = world->time_step_s();
-  // World time 0 is the last multiple of h at or before the first encoder sample (a recording
-  // from `scopekin simulate` starts at 0, as its world did).
-  const double t0 = std::floor(data.start_s / h + 1e-9) * h;
-  const auto steps = static_cast<std::size_t>(std::ceil((data.end_s - t0) / h - 1e-9));
-  std::vector<host_sim::WorldReadout> readouts;
-  readouts.reserve(steps + 1);
-  readouts.push_back(reader.read(*world));
-  ModelPrediction out;
-  for (std::size_t k = 1; k <= steps; ++k) {
+namespace {
+
+/// World time 0 is the last multiple of h at or before the first encoder sample (a recording
+/// from `scopekin simulate` starts at 0, as its world did).
+double world_origin_s(const BenchData& data, double h) { return std::floor(data.start_s / h + 1e-9) * h; }
+
+/// The step at or before recording time t.
+std::size_t step_at(double t, double t0, double h) {
+  return static_cast<std::size_t>(std::max(0.0, std::floor((t - t0) / h + 1e-9)));
+}
+
+/// Steps the world from its step `from` to `to` under the recording's hand motion, reading it
+/// after each step into readouts[k - first]. Returns "" or why the run stopped.
+std::string run_steps(model::World& world, host_sim::WorldReader& reader, const BenchData& data, double t0, std::size_t from,
+                      std::size_t to, std::size_t first, std::vector<host_sim::WorldReadout>& readouts,
+                      const std::function<void(std::size_t)>& after_step) {
+  const double h = world.time_step_s();
+  for (std::size_t k = from + 1; k <= to; ++k) {
     const double t = t0 + static_cast<double>(k) * h;
     model::HandleCommand command;
     command.insertion_mm = data.insertion_at(t);
     command.roll_rad = data.roll_at(t);
-    const model::WorldStepReport report = world->step(command);
-    if (!report.ok || report.max_penetration_mm > kMaxPenetration_mm) {
-      out.failure = "t = " + std::to_string(t) + " s: " +
-                    (report.ok ? "the scope penetrates the colon wall by " + std::to_string(report.max_penetration_mm) + " mm"
-                               : report.failure);
-      return out;
-    }
-    readouts.push_back(reader.read(*world));
-    if (progress && k % 200 == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+    const model::WorldStepReport report = world.step(command);
+    if (!report.ok || report.max_penetration_mm > kMaxPenetration_mm)
+      return "t = " + std::to_string(t) + " s: " +
+             (report.ok ? "the scope penetrates the colon wall by " + std::to_string(report.max_penetration_mm) + " mm"
+                        : report.failure);
+    readouts[k - first] = reader.read(world);
+    if (after_step) after_step(k);
   }
+  return "";
+}
+
+/// The outputs at the measured samples with time in [from_s, to_s], interpolated between the
+/// readouts of steps first .. first + readouts.size() - 1.
+void fill_outputs(const BenchData& data, const std::vector<host_sim::WorldReadout>& readouts, double t0, double h,
+                  std::size_t first, double from_s, double to_s, ModelPrediction& out) {
+  const std::size_t last = first + readouts.size() - 1;
+  for (std::size_t o = 0; o < data.outputs.size(); ++o) {
+    const MeasuredSeries& m = data.outputs[o];
+    for (std::size_t i = 0; i < m.time_s.size(); ++i) {
+      const double t = m.time_s[i];
+      if (t < from_s || t > to_s) continue;
+      const double x = std::clamp((t - t0) / h, static_cast<double>(first), static_cast<double>(last));
+      const auto k = std::min(static_cast<std::size_t>(x), last > first ? last - 1 : first);
+      const double w = x - static_cast<double>(k);
+      const host_sim::WorldReadout r =
+          host_sim::blend(readouts[k - first], readouts[std::min(k + 1, last) - first], w);
+      out.outputs[o][i] = output_of(r, m.id);
+    }
+  }
+}
+
+void size_outputs(const BenchData& data, ModelPrediction& out) {
+  out.outputs.resize(data.outputs.size());
+  for (std::size_t o = 0; o < data.outputs.size(); ++o)
+    out.outputs[o].assign(data.outputs[o].time_s.size(),
+                          Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+}
+
+}  // namespace
+
+ModelPrediction predict(const nlohmann::json& model, const std::string& model_source, const nlohmann::json& extra_effects,
+                        const BenchData& data, const std::function<void(double)>& progress,
+                        const std::vector<RunWindow>* windows, std::vector<model::World::State>* window_states) {
+  const model::Scenario scenario = model::read_scenario(scenario_for_run(model, extra_effects, data), model_source);
+  std::unique_ptr<model::World> world = model::build_world(scenario);
+  host_sim::WorldReader reader(*world);
+  const double h = world->time_step_s();
+  const double t0 = world_origin_s(data, h);
+  const auto steps = static_cast<std::size_t>(std::ceil((data.end_s - t0) / h - 1e-9));
+  // Where to save states: window w's start step (sorted by step, windows come in time order).
+  std::vector<std::size_t> save_steps;
+  if (windows != nullptr && window_states != nullptr) {
+    window_states->assign(windows->size(), model::World::State{});
+    for (const RunWindow& w : *windows) save_steps.push_back(step_at(w.start_s, t0, h));
+    for (std::size_t w = 0; w < save_steps.size(); ++w)
+      if (save_steps[w] == 0) (*window_states)[w] = world->state();
+  }
+  std::vector<host_sim::WorldReadout> readouts(steps + 1);
+  readouts[0] = reader.read(*world);
+  ModelPrediction out;
+  out.failure = run_steps(*world, reader, data, t0, 0, steps, 0, readouts, [&](std::size_t k) {
+    for (std::size_t w = 0; w < save_steps.size(); ++w)
+      if (save_steps[w] == k) (*window_states)[w] = world->state();
+    if (progress && k % 200 == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
+  });
+  if (!out.failure.empty()) return out;
   out.steps = steps;
   out.t0_s = t0;
   out.h_s = h;
   out.step_region.reserve(readouts.size());
   for (const host_sim::WorldReadout& r : readouts) out.step_region.push_back(r.tip_region);
-  out.outputs.resize(data.outputs.size());
-  for (std::size_t o = 0; o < data.outputs.size(); ++o) {
-    const MeasuredSeries& m = data.outputs[o];
-    out.outputs[o].reserve(m.time_s.size());
-    for (double t : m.time_s) {
-      const double x = std::clamp((t - t0) / h, 0.0, static_cast<double>(steps));
-      const auto i = std::min(static_cast<std::size_t>(x), steps > 0 ? steps - 1 : 0);
-      const double w = x - static_cast<double>(i);
-      const host_sim::WorldReadout r = host_sim::blend(readouts[i], readouts[std::min(i + 1, steps)], w);
-      out.outputs[o].push_back(output_of(r, m.id));
-    }
+  size_outputs(data, out);
+  fill_outputs(data, readouts, t0, h, 0, -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+               out);
+  out.ok = true;
+  return out;
+}
+
+ModelPrediction predict_windows(const nlohmann::json& model, const std::string& model_source,
+                                const nlohmann::json& extra_effects, const BenchData& data,
+                                const std::vector<RunWindow>& windows, const std::vector<model::World::State>& states,
+                                const std::vector<std::size_t>& which) {
+  const model::Scenario scenario = model::read_scenario(scenario_for_run(model, extra_effects, data), model_source);
+  std::unique_ptr<model::World> world = model::build_world(scenario);
+  const double h = world->time_step_s();
+  const double t0 = world_origin_s(data, h);
+  ModelPrediction out;
+  out.t0_s = t0;
+  out.h_s = h;
+  size_outputs(data, out);
+  for (std::size_t w : which) {
+    const RunWindow& window = windows.at(w);
+    const std::size_t from = step_at(window.start_s, t0, h);
+    const auto to = static_cast<std::size_t>(std::ceil((window.end_s - t0) / h - 1e-9));
+    world->restore(states.at(w));
+    host_sim::WorldReader reader(*world);
+    std::vector<host_sim::WorldReadout> readouts(to - from + 1);
+    readouts[0] = reader.read(*world);
+    out.failure = run_steps(*world, reader, data, t0, from, to, from, readouts, {});
+    if (!out.failure.empty()) return out;
+    out.steps += to - from;
+    fill_outputs(data, readouts, t0, h, from, window.score_from_s, window.end_s, out);
   }
   out.ok = true;
   return out;

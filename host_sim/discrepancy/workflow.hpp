@@ -5,12 +5,17 @@
 // them on the held-out blocks, and give a verdict:
 //   none        no output's held-out RMS error exceeds `significance` times its noise;
 //   named       the best single effect explains at least `min_share` of the held-out excess
-//               error; if it leaves an output significant (and explains at least 10 %), the two
-//               pairs best by their linearised joint step are fitted, and the best is named
-//               instead when it explains min_share, beats the single's BIC and explains 5 % more;
+//               error. If it leaves an output significant and a second effect is predicted to
+//               remove a quarter of what is left (best_partner_gain), or if it explains less
+//               than min_share but at least 10 %, the two pairs best by their linearised joint
+//               step are fitted (side by side), and the best is named instead when it explains
+//               min_share, beats the single's BIC and explains 5 % more;
 //   unexplained otherwise (no single effect or pair explains min_share): the candidates are
 //               reported, none is named.
 // "Excess error" is the held-out normalised cost minus what the noise alone gives (1 per output).
+// A recording longer than the fit budget is fitted on windows (fit_windows.hpp): the candidates'
+// costs are then on the windows, and the named effects are run over the whole recording, where
+// they must explain min_share again (else the verdict is unexplained).
 #include <functional>
 #include <string>
 #include <vector>
@@ -28,6 +33,9 @@ struct WorkflowOptions {
   unsigned threads = 2;
   double significance = 2.0;            ///< held-out RMS error / noise above which an output disagrees
   double min_share = 0.75;              ///< of the excess error a named effect must explain
+  /// Recording seconds a fit's run simulates at most (fit_windows.hpp); longer recordings are
+  /// fitted on windows.
+  double fit_budget_s = kDefaultFitBudget_s;
   /// Stage text and overall fraction done, now and then.
   std::function<void(const std::string&, double)> progress;
 };
@@ -42,6 +50,6 @@ struct WorkflowResult {
 
 /// Throws model::ModelError for a model that cannot be built; a model that cannot follow the
 /// recording (the run fails) throws DiscrepancyInputError saying where.
-WorkflowResult run_discrepancy(const BenchData& data, const WorkflowOptions& options);
+WorkflowResult run_discrepancy(const BenchData& recording, const WorkflowOptions& options);
 
 }  // namespace scopekin::discrepancy

@@ -62,10 +62,12 @@ WorldReadout WorldReader::read(const model::World& world) {
     r.em[k].position_mm = world.node_position_mm(nodes[k]);
     r.em[k].orientation = axis_orientation(world.node_axis(nodes[k]), r.roll_rad);
   }
-  const std::vector<Eigen::Vector3d> colon_now = world.colon_positions_mm();
-  const std::size_t next = std::min(sigmoid_point_ + 1, colon_now.size() - 1);
-  r.em[kEmSigmoid].position_mm = colon_now[sigmoid_point_];
-  const Eigen::Vector3d tangent = colon_now[next] - colon_now[sigmoid_point_ == next ? next - 1 : sigmoid_point_];
+  const std::size_t colon_nodes = colon_->points().size();
+  const std::size_t next = std::min(sigmoid_point_ + 1, colon_nodes - 1);
+  const std::size_t before = sigmoid_point_ == next ? next - 1 : sigmoid_point_;
+  r.em[kEmSigmoid].position_mm = world.colon_position_mm(sigmoid_point_);
+  const Eigen::Vector3d tangent =
+      world.colon_position_mm(next) - (before == sigmoid_point_ ? r.em[kEmSigmoid].position_mm : world.colon_position_mm(before));
   r.em[kEmSigmoid].orientation = axis_orientation(tangent, 0.0);
   for (const model::WorldContact& c : world.contacts())
     if (c.normal_force_N > 0.0 && c.arc_from_tip_mm <= kTipStretch_mm) r.tip_force_N += c.force_N;

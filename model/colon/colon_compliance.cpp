@@ -62,4 +62,11 @@ void ColonCompliance::displacement(const std::vector<ColonPointForce>& forces,
   for (std::size_t i = 0; i < nodes_; ++i) displacement_mm[i] = u.segment<3>(static_cast<Eigen::Index>(3 * i));
 }
 
+Eigen::Vector3d ColonCompliance::node_displacement(std::size_t node, const std::vector<ColonPointForce>& forces) const {
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  for (const ColonPointForce& f : forces)
+    u += node_block(node, f.segment) * ((1.0 - f.weight) * f.force_N) + node_block(node, f.segment + 1) * (f.weight * f.force_N);
+  return u;
+}
+
 }  // namespace scopekin::model

@@ -35,6 +35,10 @@ class ColonCompliance {
   Eigen::Matrix3d point_block(std::size_t segment_a, double weight_a, std::size_t segment_b, double weight_b) const;
   /// Displacement of every node [mm] under the given point forces.
   void displacement(const std::vector<ColonPointForce>& forces, std::vector<Eigen::Vector3d>& displacement_mm) const;
+  /// Displacement of one node [mm] under the given point forces: the same sum as displacement()
+  /// restricted to the node's rows, O(forces) instead of O(nodes^2) (the sensors read one node
+  /// every step).
+  Eigen::Vector3d node_displacement(std::size_t node, const std::vector<ColonPointForce>& forces) const;
 
  private:
   std::size_t nodes_ = 0;

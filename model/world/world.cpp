@@ -127,6 +127,54 @@ std::vector<Eigen::Vector3d> World::colon_positions_mm() const {
   return out;
 }
 
+World::State World::state() const {
+  State s;
+  s.time_s = time_s_;
+  s.steps_taken = steps_taken_;
+  s.roll_rad = roll_rad_;
+  s.handle_force_N = handle_force_N_;
+  s.handle_torque_Nmm = handle_torque_Nmm_;
+  s.scope = scope_.configuration();
+  s.velocity = velocity_;
+  s.colon_forces = colon_forces_;
+  s.previous_colon_forces = previous_colon_forces_;
+  s.contacts = contact_reports_;
+  s.warm_start = warm_start_;
+  s.tracking = tracking_;
+  return s;
+}
+
+void World::restore(const State& saved) {
+  if (saved.scope.positions.size() != scope_.node_count() || saved.warm_start.size() != scope_.node_count() ||
+      saved.velocity.size() != static_cast<Eigen::Index>(scope_.dof_count()))
+    throw ModelError("restore: the saved state is of a scope with " + std::to_string(saved.scope.positions.size()) +
+                     " nodes, this world's has " + std::to_string(scope_.node_count()));
+  const auto colon_nodes = static_cast<std::size_t>(colon_rest_mm_.size());
+  for (const auto* forces : {&saved.colon_forces, &saved.previous_colon_forces})
+    for (const ColonPointForce& f : *forces)
+      if (f.segment + 1 >= colon_nodes) throw ModelError("restore: the saved state is of another colon");
+  const double h = settings_.time_step_s;
+  if (std::abs(static_cast<double>(saved.steps_taken) * h - saved.time_s) > 1e-9 * std::max(1.0, saved.time_s))
+    throw ModelError("restore: the saved state was taken with another time step");
+  time_s_ = saved.time_s;
+  steps_taken_ = saved.steps_taken;
+  roll_rad_ = saved.roll_rad;
+  handle_force_N_ = saved.handle_force_N;
+  handle_torque_Nmm_ = saved.handle_torque_Nmm;
+  scope_.restore(saved.scope);
+  velocity_ = saved.velocity;
+  colon_forces_ = saved.colon_forces;
+  previous_colon_forces_ = saved.previous_colon_forces;
+  contact_reports_ = saved.contacts;
+  warm_start_ = saved.warm_start;
+  tracking_ = saved.tracking;
+}
+
+Eigen::Vector3d World::colon_position_mm(std::size_t node) const {
+  if (node >= colon_rest_mm_.size()) throw ModelError("colon_position_mm: no colon node " + std::to_string(node));
+  return to_body(colon_rest_mm_[node] + compliance_->node_displacement(node, colon_forces_));
+}
+
 double World::scope_energy_Nmm() const {
   BlockTridiagonalMatrix mass;
   scope_.assemble_mass(mass);

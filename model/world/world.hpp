@@ -178,6 +178,8 @@ class World {
   const std::vector<WorldContact>& contacts() const { return contact_reports_; }
   /// Colon centerline node positions now (at rest + displacement under the contact forces), body frame.
   std::vector<Eigen::Vector3d> colon_positions_mm() const;
+  /// One of them (cheaper than all).
+  Eigen::Vector3d colon_position_mm(std::size_t node) const;
   const ColonTube& colon() const { return body_tube_; }
   /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
   const ScopeBeam& scope_computation_frame() const { return scope_; }
@@ -190,6 +192,28 @@ class World {
   StationCompliance probe_stations(const std::vector<std::size_t>& nodes, double search_back_mm = 400.0);
   /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.
   double scope_energy_Nmm() const;
+
+  /// Everything that changes from step to step (the scope's configuration and velocity, the
+  /// contacts, the colon's loads, time, roll, the handle's reactions), without the parameters:
+  /// a world built from the same scope and colon, with other effects, continues from it. The
+  /// discrepancy workflow restarts candidate models from a baseline's states this way.
+  struct State {
+    double time_s = 0;
+    std::size_t steps_taken = 0;
+    double roll_rad = 0;
+    double handle_force_N = 0;
+    double handle_torque_Nmm = 0;
+    ScopeBeam::Configuration scope;
+    Eigen::VectorXd velocity;
+    std::vector<ColonPointForce> colon_forces, previous_colon_forces;
+    std::vector<WorldContact> contacts;
+    std::vector<std::array<double, 3>> warm_start;
+    CenterlineTracking tracking;
+  };
+  State state() const;
+  /// Continues from `saved`. Throws ModelError when it is another scope's or colon's (node counts
+  /// differ) or the step size differs (time is counted in steps).
+  void restore(const State& saved);
 
  private:
   using Problem = contact::ContactProblem<double, kMaxWorldContacts>;

@@ -40,6 +40,28 @@ PROCEDURES = {
           {"action": "advance", "start_s": 18, "end_s": 26, "speed_mm_per_s": 20}],
 }
 
+
+def cycles(speeds, period_s=20.0, advance_s=8.0):
+    """Bench cycles: advance, hold 1 s, roll 1 s (alternating), withdraw to the start at 1.5 x the
+    speed, hold for the rest of the period."""
+    steps, t = [], 0.0
+    for k, v in enumerate(speeds):
+        back = advance_s / 1.5
+        steps += [{"action": "advance", "start_s": t, "end_s": t + advance_s, "speed_mm_per_s": v},
+                  {"action": "hold", "start_s": t + advance_s, "end_s": t + advance_s + 1},
+                  {"action": "rotate", "start_s": t + advance_s + 1, "end_s": t + advance_s + 2,
+                   "speed_deg_per_s": 40 if k % 2 == 0 else -40},
+                  {"action": "withdraw", "start_s": t + advance_s + 2, "end_s": t + advance_s + 2 + back,
+                   "speed_mm_per_s": 1.5 * v},
+                  {"action": "hold", "start_s": t + advance_s + 2 + back, "end_s": t + period_s}]
+        t += period_s
+    return steps
+
+
+# 120 s of six cycles to 170-250 mm: longer than the fit budget (80 s), so the fits run on 8 s
+# windows restarted from the baseline's states (fit_windows.hpp).
+PROCEDURES["D"] = cycles([20, 28, 24, 18, 26, 22])
+
 # check -> (procedure, seed, hidden truth effects, sensors, expected verdict, fitted keys to compare)
 CHECKS = {
     "viscoadhesive_friction": ("B", 11, [{"name": "viscoadhesive_friction", "viscous_coefficient_s_per_mm": 0.003}], None),
@@ -55,6 +77,10 @@ CHECKS = {
     "two_effects": ("A", 19, [{"name": "ei_scale", "factor": 0.85},
                               {"name": "viscoadhesive_friction", "viscous_coefficient_s_per_mm": 0.003}], None),
 }
+# Checks that fit on windows, with the budget they give (recording seconds per fit run).
+WINDOWED = {"windowed": ("D", 22, [{"name": "ei_scale", "factor": 1.15}], None)}
+FIT_BUDGET_S = "80"
+CHECKS.update(WINDOWED)
 
 # The fitted parameter compared with the truth, per effect (truth key, report key, factor).
 COMPARED = {
@@ -113,7 +139,8 @@ def check_hidden(name):
     work = record(name, procedure, seed, effects, sensors)
     out = os.path.join(work, "discrepancy")
     plots = [] if name == PLOTTED else ["--no-plots"]
-    p = run("discrepancy", os.path.join(work, "recorded", "recording.csv"), "--out", out, *plots, "--quiet")
+    budget = ["--fit-budget-s", FIT_BUDGET_S] if name in WINDOWED else []
+    p = run("discrepancy", os.path.join(work, "recorded", "recording.csv"), "--out", out, *plots, *budget, "--quiet")
     print(p.stdout)
     for f in ["report.json", "report.md", "model.json", "series.csv"]:
         expect(os.path.isfile(os.path.join(out, f)), f"wrote {f}")
@@ -124,6 +151,14 @@ def check_hidden(name):
         expect(c.returncode == 0, f"the report's PNGs are non-trivial: {c.stdout.strip()} {c.stderr.strip()}")
     r = json.load(open(os.path.join(out, "report.json")))
     named = [e["name"] for e in r["effects"]]
+    windows = r["fit_windows"]
+    expect(windows["windowed"] == (name in WINDOWED), f"fitted on windows: {windows['windowed']}")
+    if name in WINDOWED:
+        spans = [(w["start_s"], w["scored_from_s"], w["end_s"]) for w in windows["windows"]]
+        expect(len(spans) == 10 and all(abs(e - s0 - 8.0) < 1e-6 and abs(f - s0 - 3.0) < 1e-6 for s0, f, e in spans),
+               f"one 8 s window per block (80 s budget), 3 s spin-up first: {spans}")
+        expect(windows["confirmation"] and windows["confirmation"]["holds"],
+               f"the named effect holds over the whole recording: {windows['confirmation']}")
     if name == "none":
         expect(r["verdict"] == "none", f"no hidden effect: verdict none (got {r['verdict']}, {named})")
         return

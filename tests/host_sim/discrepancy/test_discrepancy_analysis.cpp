@@ -9,6 +9,8 @@
 
 #include "host_sim/discrepancy/analysis.hpp"
 #include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/fit_windows.hpp"
+#include "host_sim/discrepancy/model_run.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -116,6 +118,77 @@ TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
   EXPECT_NEAR(rms_error(d, shifted, 0, SampleSet::held_out), 3.0, 1e-12);
   const std::vector<double> sigma{0.866, 0.0, 0.0};
   EXPECT_NEAR(normalised_residuals(d, shifted, sigma, SampleSet::training).squaredNorm(), std::pow(3.0 / 0.866, 2), 1e-9);
+}
+
+// Windows: one per block where the hand moves most, the first part spin-up; none when the
+// blocks fit the budget whole. A hand-made drive: 100 s holding at 50 mm except, 5 s into each
+// 10 s block, 20 mm in at 10 mm/s and out again (5..9 s).
+TEST(DiscrepancyFitWindows, OneWindowPerBlockAroundTheHandsMotion) {
+  BenchData d;
+  for (int k = 0; k <= 10000; ++k) {
+    const double t = 0.01 * k;
+    const double in_block = std::fmod(t, 10.0);
+    const double advance = in_block < 5.0   ? 0.0
+                           : in_block < 7.0 ? 10.0 * (in_block - 5.0)
+                           : in_block < 9.0 ? 10.0 * (9.0 - in_block)
+                                            : 0.0;
+    d.drive.push_back({t, 50.0 + advance, 0.0});
+  }
+  d.start_s = 0.0;
+  d.end_s = 100.0;
+  d.duration_s = 100.0;
+  d.initial_insertion_mm = 50.0;
+  EXPECT_NEAR(hand_motion_mm(d, 0.0, 10.0), 40.0, 1e-9);  // 20 mm in, 20 mm out
+  EXPECT_TRUE(choose_fit_windows(d, 100.0).empty());      // 10 s windows = the blocks: full runs
+  const std::vector<RunWindow> w = choose_fit_windows(d, 40.0);
+  ASSERT_EQ(w.size(), 10u);
+  for (int b = 0; b < 10; ++b) {
+    const RunWindow& x = w[static_cast<std::size_t>(b)];
+    EXPECT_EQ(x.block, b);
+    // 4 s windows: the one that holds all the motion is 5..9 s.
+    EXPECT_NEAR(x.start_s, 10.0 * b + 5.0, 1e-9);
+    EXPECT_NEAR(x.end_s, x.start_s + 4.0, 1e-9);
+    EXPECT_NEAR(x.score_from_s, x.start_s + 2.0, 1e-9);  // spin-up: half of a window shorter than 6 s
+  }
+  // The fit sets keep the scored spans only.
+  for (const RunWindow& x : w) d.fit_spans_s.emplace_back(x.score_from_s, x.end_s);
+  EXPECT_TRUE(in_set(d, 8.0, SampleSet::fit_training));
+  EXPECT_FALSE(in_set(d, 6.0, SampleSet::fit_training));   // spin-up
+  EXPECT_FALSE(in_set(d, 9.5, SampleSet::fit_training));   // after the window
+  EXPECT_TRUE(in_set(d, 18.0, SampleSet::fit_held_out));   // block 1
+  EXPECT_FALSE(in_set(d, 18.0, SampleSet::fit_training));
+  EXPECT_TRUE(in_set(d, 9.5, SampleSet::training));        // the plain sets are unchanged
+}
+
+// A window restarted from the full run's saved state, with the same model, steps through the
+// same numbers: its outputs are the full run's, bit for bit (the fits' finite differences rely on
+// it), and they are NaN outside the scored spans.
+TEST(DiscrepancyFitWindows, WindowedRunOfTheModelAsGivenRepeatsTheFullRun) {
+  const BenchData d = extract_bench_data(make_recording(14.0, 0.5), "r.csv");
+  const std::vector<RunWindow> windows = choose_fit_windows(d, 12.0);
+  ASSERT_EQ(windows.size(), 10u);
+  std::vector<model::World::State> states;
+  const ModelPrediction full = predict(default_model(), "default", nlohmann::json::array(), d, {}, &windows, &states);
+  ASSERT_TRUE(full.ok) << full.failure;
+  const ModelPrediction part =
+      predict_windows(default_model(), "default", nlohmann::json::array(), d, windows, states, {2, 5, 9});
+  ASSERT_TRUE(part.ok) << part.failure;
+  std::size_t compared = 0, outside = 0;
+  for (std::size_t o = 0; o < d.outputs.size(); ++o)
+    for (std::size_t i = 0; i < d.outputs[o].time_s.size(); ++i) {
+      const double t = d.outputs[o].time_s[i];
+      bool scored = false;
+      for (std::size_t w : {2u, 5u, 9u}) scored = scored || (t >= windows[w].score_from_s && t <= windows[w].end_s);
+      if (scored) {
+        EXPECT_EQ(part.outputs[o][i], full.outputs[o][i]) << "output " << o << " at " << t << " s";
+        ++compared;
+      } else {
+        EXPECT_TRUE(std::isnan(part.outputs[o][i].x()));
+        ++outside;
+      }
+    }
+  EXPECT_GT(compared, 50u);
+  EXPECT_GT(outside, compared);
 }
 
 }  // namespace
