@@ -153,6 +153,31 @@ double bic_of(const BenchData& data, const ModelPrediction& p, const std::vector
   return n * std::log(std::max(r.squaredNorm(), 1e-300) / n) + static_cast<double>(parameters) * std::log(n);
 }
 
+namespace {
+
+/// The truth_effects entries of a fit's set at values x.
+nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x) {
+  nlohmann::json list = nlohmann::json::array();
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
+    const Candidate& c = candidate_library()[fit.candidates[k]];
+    const std::vector<double> v(x.begin() + static_cast<std::ptrdiff_t>(at),
+                                x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
+    list.push_back(c.entry(v, fit.held[k]));
+    at += c.parameters.size();
+  }
+  return list;
+}
+
+std::vector<FittedParameter> parameters_of(const EffectSetFit& fit) {
+  std::vector<FittedParameter> params;
+  for (std::size_t c : fit.candidates)
+    for (const FittedParameter& p : candidate_library()[c].parameters) params.push_back(p);
+  return params;
+}
+
+}  // namespace
+
 EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator& evaluator, const BenchData& data,
                             const ModelPrediction& baseline, const std::vector<double>& sigma,
                             const std::vector<double>* start, const std::vector<nlohmann::json>* held,
@@ -160,25 +185,13 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
   const std::vector<Candidate>& library = candidate_library();
   EffectSetFit fit;
   fit.candidates = set;
-  std::vector<FittedParameter> params;
   for (std::size_t k = 0; k < set.size(); ++k) {
     const std::size_t c = set[k];
     fit.held.push_back(held != nullptr && held->size() == set.size() ? (*held)[k] : library[c].held(data, baseline));
-    for (const FittedParameter& p : library[c].parameters) params.push_back(p);
   }
+  const std::vector<FittedParameter> params = parameters_of(fit);
   const std::size_t P = params.size();
-  auto entries = [&](const std::vector<double>& x) {
-    nlohmann::json list = nlohmann::json::array();
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < set.size(); ++k) {
-      const Candidate& c = library[set[k]];
-      const std::vector<double> v(x.begin() + static_cast<std::ptrdiff_t>(at),
-                                  x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
-      list.push_back(c.entry(v, fit.held[k]));
-      at += c.parameters.size();
-    }
-    return list;
-  };
+  auto entries = [&](const std::vector<double>& x) { return entries_of(fit, x); };
   auto make_point = [&](std::vector<double> x, ModelPrediction p) {
     Point pt;
     pt.x = std::move(x);
@@ -272,30 +285,6 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Evaluator
   return fit;
 }
 
-namespace {
-
-/// The truth_effects entries of a fit's set at values x.
-nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x) {
-  nlohmann::json list = nlohmann::json::array();
-  std::size_t at = 0;
-  for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
-    const Candidate& c = candidate_library()[fit.candidates[k]];
-    const std::vector<double> v(x.begin() + static_cast<std::ptrdiff_t>(at),
-                                x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
-    list.push_back(c.entry(v, fit.held[k]));
-    at += c.parameters.size();
-  }
-  return list;
-}
-
-std::vector<FittedParameter> parameters_of(const EffectSetFit& fit) {
-  std::vector<FittedParameter> params;
-  for (std::size_t c : fit.candidates)
-    for (const FittedParameter& p : candidate_library()[c].parameters) params.push_back(p);
-  return params;
-}
-
-}  // namespace
 
 void add_uncertainty(EffectSetFit& fit, const Evaluator& evaluator, const BenchData& data, const std::vector<double>& sigma) {
   const std::vector<FittedParameter> params = parameters_of(fit);
