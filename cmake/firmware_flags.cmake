@@ -3,13 +3,8 @@
 # Everything compiled as firmware (firmware/, the hal/ parts it links, the bare-metal platform
 # code and the bare-metal test runner) gets:
 #   * the strict warning set (scopekin_strict_warnings),
-#   * -fno-exceptions -fno-rtti   (hard rule: no exceptions, no RTTI),
-#   * EIGEN_NO_MALLOC             (any Eigen heap allocation is an assertion failure).
-#
-# EIGEN_NO_MALLOC is PRIVATE on purpose: firmware public headers do not expose Eigen, and the
-# firmware only uses fixed-size Eigen objects, which never instantiate Eigen's allocation
-# functions — so host code that links the firmware library and uses dynamic Eigen (model/)
-# does not see a second, different definition of those inline functions.
+#   * -fno-exceptions -fno-rtti   (hard rule: no exceptions, no RTTI).
+# The firmware uses no Eigen (it links none; only model/ and host_sim/ do).
 include_guard(GLOBAL)
 include(warnings)
 
@@ -18,5 +13,4 @@ function(scopekin_firmware_target target)
   target_compile_options(${target} PRIVATE
     $<$<COMPILE_LANGUAGE:CXX>:-fno-exceptions>
     $<$<COMPILE_LANGUAGE:CXX>:-fno-rtti>)
-  target_compile_definitions(${target} PRIVATE EIGEN_NO_MALLOC)
 endfunction()

@@ -11,8 +11,8 @@ set(CMAKE_FIND_ROOT_PATH ${SCOPEKIN_AARCH64_SYSROOT})
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
-# BOTH: lets header-only, architecture-independent packages (Eigen3Config.cmake in
-# /usr/share/eigen3/cmake) be found on the build machine.  Compiled packages must not be used
+# BOTH: lets header-only, architecture-independent packages (CLI11 and nlohmann-json for
+# scopekin-box) be found on the build machine.  Compiled packages must not be used
 # this way; GoogleTest is therefore built from source when cross-compiling (cmake/scopekin_gtest.cmake).
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE BOTH)
 

@@ -29,7 +29,7 @@ set(CMAKE_FIND_ROOT_PATH /usr/lib/arm-none-eabi)
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
-# BOTH: header-only Eigen3Config.cmake is found on the build machine (see aarch64 toolchain).
+# BOTH: header-only packages are found on the build machine (see aarch64 toolchain).
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE BOTH)
 
 # CTest runs every test executable through this wrapper (qemu-system-arm mps2-an386, semihosting,

@@ -1,35 +1,17 @@
 // sensor_box.cpp — see sensor_box.hpp.
 #include "executive/sensor_box.hpp"
 
+#include "executive/estimator_inputs.hpp"
+
 namespace scopekin::executive {
 
 namespace {
 
 using fixed_point::Q16_16;
+using namespace messages;  // the box's fault vocabulary
 
 constexpr std::uint32_t kMinPeriodUs = 1000;
 constexpr std::uint32_t kMaxPeriodUs = 1000000;
-
-/// kinetics fault bits that mean "a handle signal is stale: its last value is held".
-constexpr std::uint32_t kKineticStaleFaults = kinetics::kFaultInsertionStale |
-                                              kinetics::kFaultForceStale |
-                                              kinetics::kFaultTorqueStale |
-                                              kinetics::kFaultRollStale;
-/// ... and "the depth the model uses is not the reading".
-constexpr std::uint32_t kKineticDepthFaults = kinetics::kFaultInsertionRange |
-                                              kinetics::kFaultInsertionJump |
-                                              kinetics::kFaultDepthOutsideModel;
-
-std::uint16_t driver_faults_of(std::uint8_t handle_faults) {
-    std::uint16_t faults = 0;
-    if ((handle_faults & drivers::kForceTorqueStale) != 0U) faults |= kFaultForceTorqueStale;
-    if ((handle_faults & drivers::kInsertionRollStale) != 0U) faults |= kFaultEncoderStale;
-    if ((handle_faults & drivers::kBadLength) != 0U) faults |= kFaultBadLength;
-    if ((handle_faults & drivers::kOutOfRange) != 0U) faults |= kFaultOutOfRange;
-    if ((handle_faults & drivers::kSensorStatus) != 0U) faults |= kFaultSensorStatus;
-    if ((handle_faults & drivers::kCounterGap) != 0U) faults |= kFaultCounterGap;
-    return faults;
-}
 
 std::uint8_t saturate_u8(std::uint32_t value) {
     return value > 255U ? std::uint8_t{255} : static_cast<std::uint8_t>(value);
@@ -47,7 +29,8 @@ bool SensorBox::init(const BoxConfig& config, hal::CanBus& can, hal::SerialPort*
     can_ = &can;
     serial_ = serial;
     handle_sensors_ = drivers::HandleSensors{config_.handle_sensors};
-    em_tracker_ = hal::EmTrackerDriver{config_.em_tracker};
+    em_tracker_ = drivers::EmTrackerDriver{config_.em_tracker};
+    tracker_ = kinetics::TrackerInputs{};
     kinetics::init(config_.kinetics, kinetics_);
     estimator_ok_ = kinetics_.config_fault == kinetics::ConfigFault::none;
     box_state_ = estimator_ok_ ? protocol::BoxState::starting : protocol::BoxState::no_estimate;
@@ -64,47 +47,35 @@ void SensorBox::read_can() {
         ++counters_.frames_read;
         if (received.frame.error) {
             can_health_.on_error_frame(received.frame);
-            period_faults_ |= kFaultCanErrorFrame;
+            period_faults_ |= kBoxFaultCanErrorFrame;
             continue;
         }
         if (!handle_sensors_.accept(received)) {
             ++counters_.unknown_ids;
-            period_faults_ |= kFaultUnknownId;
+            period_faults_ |= kBoxFaultUnknownId;
         }
     }
     const std::uint32_t dropped = can_->counters().dropped;
     if (dropped != last_can_dropped_) {
-        period_faults_ |= kFaultReceiveDropped;
+        period_faults_ |= kBoxFaultReceiveDropped;
         last_can_dropped_ = dropped;
     }
 }
 
 void SensorBox::read_serial(std::uint64_t now_us) {
     (void)em_tracker_.service(*serial_, now_us);
-    hal::EmTrackerSample sample{};
-    for (std::size_t n = 0; n < hal::EmTrackerDriver::kSampleQueueCapacity; ++n) {  // bound
+    tracker_.fresh_mask = 0;  // fresh: a valid sample arrived in this period
+    EmTrackerSample sample{};
+    for (std::size_t n = 0; n < drivers::EmTrackerDriver::kSampleQueueCapacity; ++n) {  // bound
         if (!em_tracker_.pop(sample)) {
             break;
         }
+        keep_tracker_sample(sample, tracker_);
     }
-    // TrackerFaults bits (scopekin.dbc): 0 stale, 1 out of range, 2 quaternion norm, 3 device
-    // time, 4 unknown sensor, 5 device status, 6 framing (checksum, length, type, overflow),
-    // 7 serial port closed or failed, sample queue overflow.
+    tracker_.stale_mask = em_tracker_.stale_sources();
     const std::uint32_t flags = em_tracker_.take_fault_flags();
-    constexpr std::uint32_t kFraming = hal::kEmFaultBadChecksum | hal::kEmFaultBadLength |
-                                       hal::kEmFaultUnknownType | hal::kEmFaultBufferOverflow;
-    constexpr std::uint32_t kLink = hal::kEmFaultSerial | hal::kEmFaultQueueOverflow;
-    tracker_faults_ = static_cast<std::uint8_t>(flags & 0x3FU);
-    if ((flags & kFraming) != 0U) {
-        tracker_faults_ = static_cast<std::uint8_t>(tracker_faults_ | (1U << 6U));
-        period_faults_ |= kFaultSerialFraming;
-    }
-    if ((flags & kLink) != 0U) {
-        tracker_faults_ = static_cast<std::uint8_t>(tracker_faults_ | (1U << 7U));
-    }
-    if ((flags & hal::kEmFaultStale) != 0U) {
-        period_faults_ |= kFaultTrackerStale;
-    }
+    tracker_faults_ = tracker_faults_of(flags);
+    period_faults_ |= box_faults_of_tracker(flags);
 }
 
 void SensorBox::publish(const hal::CanFrame& frame) {
@@ -114,7 +85,7 @@ void SensorBox::publish(const hal::CanFrame& frame) {
         can_health_.on_sent();
     } else {
         ++counters_.send_failures;
-        period_faults_ |= kFaultSendFailed;
+        period_faults_ |= kBoxFaultSendFailed;
         can_health_.on_send_failure(status);
     }
 }
@@ -122,7 +93,7 @@ void SensorBox::publish(const hal::CanFrame& frame) {
 void SensorBox::run_period(std::uint64_t now_us, std::uint32_t period_overruns) {
     ++counters_.periods;
     if (period_overruns != counters_.period_overruns) {
-        period_faults_ |= kFaultPeriodOverrun;
+        period_faults_ |= kBoxFaultPeriodOverrun;
         counters_.period_overruns = period_overruns;
     }
 
@@ -131,18 +102,18 @@ void SensorBox::run_period(std::uint64_t now_us, std::uint32_t period_overruns) 
     if (serial_ != nullptr) {
         read_serial(now_us);
     }
-    const kinetics::Inputs inputs = handle_sensors_.take_inputs(now_us);
-    period_faults_ |= driver_faults_of(handle_sensors_.faults());
+    const kinetics::Inputs inputs = assemble_inputs(handle_sensors_.take_samples(now_us), tracker_);
+    period_faults_ |= handle_sensors_.faults();
     if (can_health_.state() == protocol::CanState::bus_off) {
-        period_faults_ |= kFaultBusOff;
+        period_faults_ |= kBoxFaultBusOff;
     }
 
     // step + monitor
     kinetics::step(inputs, kinetics_, outputs_);
-    driver_faults_ = period_faults_;
+    box_faults_ = period_faults_;
     period_faults_ = 0;
 
-    const bool faulty = driver_faults_ != 0U || outputs_.fault_flags != 0U;
+    const bool faulty = box_faults_ != 0U || outputs_.fault_flags != 0U;
     if (estimator_ok_) {
         box_state_ = faulty ? protocol::BoxState::degraded : protocol::BoxState::running;
     }
@@ -152,7 +123,7 @@ void SensorBox::run_period(std::uint64_t now_us, std::uint32_t period_overruns) 
     const auto kinetic_faults = static_cast<std::uint16_t>(outputs_.fault_flags & 0xFFFFU);
     const std::uint8_t tracker_faults = tracker_faults_;
     const bool faults_changed = kinetic_faults != last_status_kinetic_faults_ ||
-                                driver_faults_ != last_status_driver_faults_ ||
+                                box_faults_ != last_status_box_faults_ ||
                                 tracker_faults != last_status_tracker_faults_;
     publish_status(faults_changed);
 }
@@ -167,8 +138,8 @@ void SensorBox::publish_outputs() {
         estimate.tip_velocity_mm_per_s = outputs_.tip_velocity_mm_per_s;
         estimate.advance_efficiency = outputs_.advance_efficiency;
     }
-    estimate.inputs_stale = (outputs_.fault_flags & kKineticStaleFaults) != 0U;
-    estimate.depth_clamped = (outputs_.fault_flags & kKineticDepthFaults) != 0U;
+    estimate.inputs_stale = inputs_stale(outputs_.fault_flags);
+    estimate.depth_clamped = depth_clamped(outputs_.fault_flags);
     estimate.step_counter = step_counter;
     publish(protocol::encode(estimate));
 
@@ -240,11 +211,11 @@ void SensorBox::publish_status(bool faults_changed) {
     status.state = box_state_;
     status.can_state = can_health_.take_worst_state();
     status.kinetic_faults = static_cast<std::uint16_t>(outputs_.fault_flags & 0xFFFFU);
-    status.driver_faults = driver_faults_;
+    status.driver_faults = box_faults_;
     status.period_overruns = saturate_u8(counters_.period_overruns);
     status.tracker_faults = tracker_faults_;
     last_status_kinetic_faults_ = status.kinetic_faults;
-    last_status_driver_faults_ = status.driver_faults;
+    last_status_box_faults_ = status.driver_faults;
     last_status_tracker_faults_ = status.tracker_faults;
     publish(protocol::encode(status));
 }
@@ -252,7 +223,7 @@ void SensorBox::publish_status(bool faults_changed) {
 std::uint32_t SensorBox::counter_value(protocol::BoxCounterIndex index) const {
     const hal::CanCounters can = can_->counters();
     const drivers::HandleSensorCounters& handle = handle_sensors_.counters();
-    const hal::EmTrackerDriverCounters tracker = em_tracker_.counters();
+    const drivers::EmTrackerDriverCounters tracker = em_tracker_.counters();
     switch (index) {
         case protocol::BoxCounterIndex::can_received: return can.received;
         case protocol::BoxCounterIndex::can_dropped: return can.dropped;

@@ -3,10 +3,10 @@
 //   read     drain the CAN receive queue (at most kMaxFramesPerPeriod frames per period; the rest
 //            wait in the backend's queue for the next period), hand each frame to its driver,
 //            track the controller's health from error frames; service the serial sensors
-//            (EM tracker, tip force: validated, counted and flagged; their samples are for the
-//            test bench's recording and are not inputs of the estimator)
-//   step     kinetics::step on the handle sensors' inputs (the estimator validates them again and
-//            holds stale signals)
+//            (EM tracker, tip force: validated, counted and flagged; the latest valid sample of
+//            each source is kept for the estimator's input, kinetics::TrackerInputs)
+//   step     kinetics::step on the Inputs assembled from the drivers' messages
+//            (estimator_inputs.hpp; the estimator validates them again and holds stale signals)
 //   monitor  the estimator's monitors (self-lock, contact force) run inside step
 //   publish  KineticEstimate, ContactSummary, Alarms, one StationForces and one BoxCounters frame
 //            every period; BoxStatus every `status_every_periods` and at once in any period whose
@@ -21,19 +21,20 @@
 // last value and sets its own stale flag in every period without a fresh sample, so the next
 // BoxStatus (sent at once because the bits changed) reports it, and KineticEstimate.InputsStale
 // marks the held estimate.  When samples return, the flags clear the same way.
-// The driver fault bits of a period are taken after `step`, before `publish`: a send that fails
-// is reported (kFaultSendFailed) from the next period on.
+// The fault bits of a period (messages/box_faults.hpp, the box's one fault vocabulary) are taken
+// after `step`, before `publish`: a send that fails is reported (kBoxFaultSendFailed) from the
+// next period on.
 #pragma once
 
 #include <cstdint>
 
-#include "executive/box_faults.hpp"
+#include "drivers/em_tracker_driver.hpp"
+#include "drivers/handle_sensors.hpp"
 #include "executive/can_health.hpp"
 #include "hal/can_bus.hpp"
-#include "hal/drivers/em_tracker_driver.hpp"
-#include "hal/drivers/handle_sensors.hpp"
 #include "hal/serial_port.hpp"
 #include "kinetics/kinetics.hpp"
+#include "messages/box_faults.hpp"
 #include "protocol/can/scopekin_messages.hpp"
 
 namespace scopekin::executive {
@@ -46,7 +47,7 @@ struct BoxConfig {
     std::uint32_t period_us{5000};             ///< 1 ms .. 1 s; sets kinetics.period_s
     kinetics::Config kinetics{};               ///< period_s is overwritten from period_us
     drivers::HandleSensorConfig handle_sensors{};
-    hal::EmTrackerDriverConfig em_tracker{};
+    drivers::EmTrackerDriverConfig em_tracker{};
     std::uint16_t status_every_periods{20};    ///< heartbeat: 100 ms at 5 ms
     std::uint32_t send_timeout_us{0};          ///< per frame; 0: never block the period
 };
@@ -74,13 +75,15 @@ public:
     [[nodiscard]] const kinetics::Outputs& outputs() const { return outputs_; }
     [[nodiscard]] const BoxCounters& counters() const { return counters_; }
     [[nodiscard]] const drivers::HandleSensors& handle_sensors() const { return handle_sensors_; }
-    [[nodiscard]] const hal::EmTrackerDriver& em_tracker() const { return em_tracker_; }
+    [[nodiscard]] const drivers::EmTrackerDriver& em_tracker() const { return em_tracker_; }
+    /// The tracker part of the estimator's last Inputs (all zero without a serial port).
+    [[nodiscard]] const kinetics::TrackerInputs& tracker_inputs() const { return tracker_; }
     /// BoxStatus.TrackerFaults of the last period (0 without a serial port).
     [[nodiscard]] std::uint8_t tracker_faults() const { return tracker_faults_; }
     [[nodiscard]] const CanHealth& can_health() const { return can_health_; }
     [[nodiscard]] const hal::CanCounters can_counters() const { return can_->counters(); }
-    /// Driver fault bits of the last period (DriverFault).
-    [[nodiscard]] std::uint16_t driver_faults() const { return driver_faults_; }
+    /// Fault bits of the last period (messages::BoxFault; BoxStatus.DriverFaults on the wire).
+    [[nodiscard]] std::uint16_t box_faults() const { return box_faults_; }
     [[nodiscard]] protocol::BoxState box_state() const { return box_state_; }
 
 private:
@@ -98,15 +101,16 @@ private:
     kinetics::State kinetics_{};
     kinetics::Outputs outputs_{};
     drivers::HandleSensors handle_sensors_{};
-    hal::EmTrackerDriver em_tracker_{};
+    drivers::EmTrackerDriver em_tracker_{};
+    kinetics::TrackerInputs tracker_{};
     std::uint8_t tracker_faults_{0};
     CanHealth can_health_{};
     BoxCounters counters_{};
     protocol::BoxState box_state_{protocol::BoxState::starting};
-    std::uint16_t driver_faults_{0};
+    std::uint16_t box_faults_{0};
     std::uint16_t period_faults_{0};      ///< gathered during the period
     std::uint32_t last_can_dropped_{0};
-    std::uint16_t last_status_driver_faults_{0};
+    std::uint16_t last_status_box_faults_{0};
     std::uint16_t last_status_kinetic_faults_{0};
     std::uint8_t last_status_tracker_faults_{0};
     std::uint16_t periods_since_status_{0};

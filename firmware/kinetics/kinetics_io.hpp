@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "fixed_point/q_format.hpp"
+#include "messages/em_tracker_samples.hpp"
 
 namespace scopekin::kinetics {
 
@@ -32,13 +33,26 @@ enum InputSignal : std::uint8_t {
 };
 inline constexpr std::uint8_t kAllInputSignals = kHandleForce | kHandleTorque | kInsertion | kRoll;
 
-/// One period's handle sensor samples (the drivers fill it).
+/// The test bench's optional serial sensors (EM tracker, tip force), as the executive last
+/// received them: the latest valid sample of each source.  Without a serial port every sample
+/// is zero, never fresh, never valid.  Today's estimator does not read them.
+struct TrackerInputs {
+    std::array<messages::EmPoseSample, messages::kEmSensorCount> pose{};  ///< by EmSensor
+    messages::TipForceSample tip_force{};
+    std::uint8_t fresh_mask{0};  ///< messages::EmTrackerSource bits: new valid sample this period
+    std::uint8_t valid_mask{0};  ///< ... a valid sample since start
+    std::uint8_t stale_mask{0};  ///< ... the driver flags stale now
+};
+
+/// One period's sensor samples (the executive assembles them from the drivers' messages:
+/// executive/estimator_inputs.hpp).
 struct Inputs {
     Q16_16 handle_force_N{};       ///< axial force at the handle, + pushing in
     Q16_16 handle_torque_Nmm{};    ///< torque about the shaft axis
     Q16_16 insertion_mm{};         ///< scope length past the anus
     Q16_16 roll_rad{};             ///< shaft roll, unwrapped
     std::uint8_t fresh_mask{0};    ///< InputSignal bits: a new, valid sample arrived this period
+    TrackerInputs tracker{};       ///< test bench only (optional)
 };
 
 /// Fault flags (Outputs::fault_flags, bit set = fault present this step).

@@ -50,7 +50,7 @@ void FirmwareLoop::run_period(std::uint64_t time_us) {
       default: ++published_.other; break;
     }
   }
-  if (on_period_) on_period_({time_us, &box_->outputs(), box_->driver_faults()});
+  if (on_period_) on_period_({time_us, &box_->outputs(), box_->box_faults()});
 }
 
 }  // namespace scopekin::host_sim

@@ -28,7 +28,7 @@ inline constexpr std::uint32_t kBoxPeriodUs = 5000;
 struct BoxPeriod {
   std::uint64_t time_us = 0;
   const kinetics::Outputs* outputs = nullptr;
-  std::uint16_t driver_faults = 0;
+  std::uint16_t box_faults = 0;  ///< messages::BoxFault bits (BoxStatus.DriverFaults)
 };
 
 /// Frames the box published, by message (drained from the wire every period).

@@ -92,10 +92,10 @@ int main() {
     write_number("frames read: ", g_box.counters().frames_read);
     write_number("period overruns: ", timer.overruns());
     write_number("tip path (0.1 mm): ", static_cast<std::uint32_t>(last.tip_path_mm.raw() / 6554));
-    write_number("driver faults: ", g_box.driver_faults());
+    write_number("driver faults: ", g_box.box_faults());
     const bool ok = estimator_ok && estimates == kDemoPeriods && alarms == kDemoPeriods &&
                     statuses >= kDemoPeriods / 20U && last.estimate_valid && !last.inputs_stale &&
-                    last.tip_path_mm > Q16_16::from_int(50) && g_box.driver_faults() == 0U &&
+                    last.tip_path_mm > Q16_16::from_int(50) && g_box.box_faults() == 0U &&
                     g_box.counters().frames_read == 2U * 5U * kDemoPeriods;
     scopekin_semihost_write0(ok ? "scopekin box (cortex-m4): PASS\n" : "scopekin box (cortex-m4): FAIL\n");
     return ok ? 0 : 1;

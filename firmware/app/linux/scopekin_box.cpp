@@ -222,7 +222,7 @@ int main(int argc, char** argv) {
                          state_name(box.box.box_state()),
                          static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0,
                          static_cast<unsigned>(outputs.fault_flags),
-                         static_cast<unsigned>(box.box.driver_faults()),
+                         static_cast<unsigned>(box.box.box_faults()),
                          outputs.self_lock_alarm ? 1 : 0);
         }
     }

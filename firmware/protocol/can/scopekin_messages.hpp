@@ -65,7 +65,7 @@ struct BoxStatus {
     BoxState state{BoxState::starting};
     CanState can_state{CanState::error_active};
     std::uint16_t kinetic_faults{0};   ///< kinetics::FaultFlag bits
-    std::uint16_t driver_faults{0};    ///< executive DriverFault bits
+    std::uint16_t driver_faults{0};    ///< messages::BoxFault bits
     std::uint8_t period_overruns{0};   ///< saturating
     std::uint8_t tracker_faults{0};
 };

@@ -4,7 +4,7 @@
 // input) is specified in em_tracker_serial.md next to this file; the constants below are that
 // document's numbers.  This layer knows bytes and raw wire integers only; turning frames into
 // validated, time-stamped samples in mm / N (Q16.16) is the driver's job
-// (hal/drivers/em_tracker_driver.hpp).
+// (firmware/drivers/em_tracker_driver.hpp).
 //
 // Firmware rules: no heap, no exceptions, fixed-size storage (the framer owns a
 // kEmTrackerFramerCapacity-byte ring), every loop bounded by a compile-time capacity or by the

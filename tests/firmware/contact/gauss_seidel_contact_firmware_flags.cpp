@@ -1,5 +1,5 @@
 // Compile-only check, built on EVERY preset with the firmware flags (cmake/firmware_flags.cmake:
-// strict warnings, -fno-exceptions, -fno-rtti, EIGEN_NO_MALLOC): the contact solver template,
+// strict warnings, -fno-exceptions, -fno-rtti): the contact solver template,
 // explicitly instantiated for float, double and the firmware's Q16_16.  On host/asan/aarch64 the
 // float and Q16_16 test executables are built with GoogleTest (exceptions on), so this object
 // library is what proves the firmware build of the header there.  Nothing links it.

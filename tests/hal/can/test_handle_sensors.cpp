@@ -1,8 +1,9 @@
-// The handle sensors' CAN driver (hal/drivers/handle_sensors): samples, freshness, staleness,
-// and every fault counted without touching the held sample.
+// The handle sensors' CAN driver (firmware/drivers/handle_sensors): time-stamped samples,
+// freshness, staleness, and every fault counted (as the box's fault bits) without touching the
+// held sample.
 #include <cstdint>
 
-#include "hal/drivers/handle_sensors.hpp"
+#include "drivers/handle_sensors.hpp"
 #include "portable_check.hpp"
 #include "protocol/can/scopekin_messages.hpp"
 
@@ -11,7 +12,7 @@ namespace {
 using scopekin::fixed_point::Q16_16;
 namespace protocol = scopekin::protocol;
 namespace drivers = scopekin::drivers;
-namespace kinetics = scopekin::kinetics;
+namespace messages = scopekin::messages;
 using scopekin::hal::ReceivedCanFrame;
 
 ReceivedCanFrame force_frame(std::int32_t force_N, std::uint8_t counter, std::uint64_t time_us,
@@ -37,15 +38,17 @@ SCOPEKIN_TEST(HandleSensors, ValidSamplesAreFreshOncePerPeriod) {
     SCOPEKIN_EXPECT_TRUE(sensors.accept(force_frame(3, 0, 1000)));
     SCOPEKIN_EXPECT_TRUE(sensors.accept(force_frame(4, 1, 2000)));
     SCOPEKIN_EXPECT_TRUE(sensors.accept(insertion_frame(250, 7, 2000)));
-    kinetics::Inputs inputs = sensors.take_inputs(5000);
-    SCOPEKIN_EXPECT_EQ(inputs.fresh_mask, kinetics::kAllInputSignals);
-    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(4).raw());  // the latest
-    SCOPEKIN_EXPECT_EQ(inputs.insertion_mm.raw(), Q16_16::from_int(250).raw());
+    messages::HandleSamples samples = sensors.take_samples(5000);
+    SCOPEKIN_EXPECT_TRUE(samples.force_torque_fresh && samples.insertion_roll_fresh);
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(), Q16_16::from_int(4).raw());  // the latest
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.receive_time_us, 2000U);  // ... with its receive time
+    SCOPEKIN_EXPECT_EQ(samples.insertion_roll.insertion_mm.raw(), Q16_16::from_int(250).raw());
+    SCOPEKIN_EXPECT_EQ(samples.insertion_roll.receive_time_us, 2000U);
     SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
     // Nothing new: the values are held, nothing is fresh, not yet stale (5 ms < 15 ms).
-    inputs = sensors.take_inputs(10000);
-    SCOPEKIN_EXPECT_EQ(inputs.fresh_mask, 0);
-    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(4).raw());
+    samples = sensors.take_samples(10000);
+    SCOPEKIN_EXPECT_TRUE(!samples.force_torque_fresh && !samples.insertion_roll_fresh);
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(), Q16_16::from_int(4).raw());
     SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
     SCOPEKIN_EXPECT_EQ(sensors.counters().force_torque_samples, 2U);
 }
@@ -53,22 +56,22 @@ SCOPEKIN_TEST(HandleSensors, ValidSamplesAreFreshOncePerPeriod) {
 SCOPEKIN_TEST(HandleSensors, StaleAfterTheTimeoutAndRecovers) {
     drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000}};
     // Never seen: stale from the start.
-    (void)sensors.take_inputs(1000);
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kForceTorqueStale | drivers::kInsertionRollStale);
+    (void)sensors.take_samples(1000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultForceTorqueStale | messages::kBoxFaultEncoderStale);
     (void)sensors.accept(force_frame(1, 0, 2000));
     (void)sensors.accept(insertion_frame(100, 0, 2000));
-    (void)sensors.take_inputs(5000);
+    (void)sensors.take_samples(5000);
     SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
     (void)sensors.accept(insertion_frame(101, 1, 6000));
-    (void)sensors.take_inputs(17000);  // force: 15 ms old, not beyond the timeout
+    (void)sensors.take_samples(17000);  // force: 15 ms old, not beyond the timeout
     SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
-    (void)sensors.take_inputs(17001);  // 15.001 ms: stale; insertion (11 ms) not
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kForceTorqueStale);
+    (void)sensors.take_samples(17001);  // 15.001 ms: stale; insertion (11 ms) not
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultForceTorqueStale);
     SCOPEKIN_EXPECT_EQ(sensors.counters().stale_events, 1U);  // never-seen is stale, not an event
     (void)sensors.accept(force_frame(2, 9, 18000));  // counter jumped while stale: not a gap
-    const kinetics::Inputs inputs = sensors.take_inputs(20000);
+    const messages::HandleSamples samples = sensors.take_samples(20000);
     SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
-    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(2).raw());
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(), Q16_16::from_int(2).raw());
     SCOPEKIN_EXPECT_EQ(sensors.counters().counter_gaps, 0U);
 }
 
@@ -91,16 +94,16 @@ SCOPEKIN_TEST(HandleSensors, FaultsAreCountedAndTheHeldSampleKept) {
     extended.frame.extended = true;
     SCOPEKIN_EXPECT_TRUE(!sensors.accept(extended));
 
-    const kinetics::Inputs inputs = sensors.take_inputs(5000);
-    SCOPEKIN_EXPECT_EQ(inputs.handle_force_N.raw(), Q16_16::from_int(6).raw());
+    const messages::HandleSamples samples = sensors.take_samples(5000);
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(), Q16_16::from_int(6).raw());
     SCOPEKIN_EXPECT_EQ(sensors.counters().counter_gaps, 2U);
     SCOPEKIN_EXPECT_EQ(sensors.counters().bad_length, 1U);
     SCOPEKIN_EXPECT_EQ(sensors.counters().sensor_status, 1U);
     SCOPEKIN_EXPECT_EQ(sensors.counters().force_torque_samples, 2U);
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kCounterGap | drivers::kBadLength |
-                                             drivers::kSensorStatus | drivers::kInsertionRollStale);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultCounterGap | messages::kBoxFaultBadLength |
+                                             messages::kBoxFaultSensorStatus | messages::kBoxFaultEncoderStale);
     // The flags belong to the period they happened in.
     (void)sensors.accept(force_frame(7, 5, 6000));
-    (void)sensors.take_inputs(10000);
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), drivers::kInsertionRollStale);
+    (void)sensors.take_samples(10000);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultEncoderStale);
 }

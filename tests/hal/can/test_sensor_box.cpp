@@ -1,14 +1,20 @@
 // The box's cyclic executive (firmware/executive/sensor_box) on the loopback HAL, driven by
 // simulated time: what it publishes every period, a sensor that stops and returns, error
-// frames and bus-off, and garbage on the bus that must change nothing but counters.
+// frames and bus-off, garbage on the bus that must change nothing but counters, and the test
+// bench's EM tracker samples reaching the estimator's input.
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <span>
 
 #include "executive/sensor_box.hpp"
 #include "hal/loopback/loopback_can.hpp"
+#include "hal/loopback/loopback_serial.hpp"
 #include "hal/loopback/simulated_clock.hpp"
 #include "kinetics/default_reduced_tables.hpp"
 #include "portable_check.hpp"
 #include "protocol/can/scopekin_messages.hpp"
+#include "protocol/em_tracker/em_tracker_frame.hpp"
 
 namespace {
 
@@ -16,6 +22,7 @@ using scopekin::fixed_point::Q16_16;
 namespace protocol = scopekin::protocol;
 namespace executive = scopekin::executive;
 namespace hal = scopekin::hal;
+namespace messages = scopekin::messages;
 
 constexpr std::uint64_t kPeriodUs = 5000;
 
@@ -46,11 +53,11 @@ struct Bench {
     Q16_16 insertion_mm = Q16_16::from_int(100);
     Q16_16 speed_mm_per_ms = Q16_16::from_ratio(1, 20);  // 50 mm/s
 
-    void start() {
+    void start(hal::SerialPort* serial = nullptr) {
         executive::BoxConfig config{};
         config.period_us = kPeriodUs;
         config.kinetics.tables = &scopekin::kinetics::default_reduced_tables();
-        SCOPEKIN_EXPECT_TRUE(box.init(config, wire.box(), nullptr));
+        SCOPEKIN_EXPECT_TRUE(box.init(config, wire.box(), serial));
     }
 
     /// One millisecond of the world: each sensor sends one frame.
@@ -111,6 +118,17 @@ Bench bench_stale;
 Bench bench_bus_off;
 Bench bench_clean;
 Bench bench_noisy;
+Bench bench_tracker;
+hal::LoopbackSerialPort tracker_line{};
+
+/// Writes one EM tracker frame of `message` into the line the box reads.
+template <typename Message, typename Encode>
+void tracker_sends(const Message& message, Encode encode) {
+    std::array<std::uint8_t, scopekin::protocol::kEmTrackerMaxFrameSize> bytes{};
+    const std::size_t size = encode(message, bytes);
+    SCOPEKIN_EXPECT_TRUE(size > 0U);
+    SCOPEKIN_EXPECT_EQ(tracker_line.device_write(std::span<const std::uint8_t>{bytes.data(), size}), size);
+}
 
 }  // namespace
 
@@ -133,7 +151,7 @@ SCOPEKIN_TEST(SensorBox, PublishesEveryPeriodAndAHeartbeat) {
     SCOPEKIN_EXPECT_TRUE(statuses >= 5 && statuses <= 7);
     const Published out = bench.period();
     SCOPEKIN_EXPECT_TRUE(!out.estimate.inputs_stale);
-    SCOPEKIN_EXPECT_EQ(bench.box.driver_faults(), 0);
+    SCOPEKIN_EXPECT_EQ(bench.box.box_faults(), 0);
     SCOPEKIN_EXPECT_TRUE(bench.box.box_state() == protocol::BoxState::running ||
                          bench.box.box_state() == protocol::BoxState::degraded);
     SCOPEKIN_EXPECT_EQ(bench.box.handle_sensors().counters().counter_gaps, 0U);
@@ -172,7 +190,7 @@ SCOPEKIN_TEST(SensorBox, ASensorThatStopsIsFlaggedWithinThreePeriodsAndRecovers)
         out = bench.period();
         SCOPEKIN_EXPECT_TRUE(out.estimate.inputs_stale);
     }
-    SCOPEKIN_EXPECT_TRUE((bench.box.driver_faults() & executive::kFaultEncoderStale) != 0U);
+    SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultEncoderStale) != 0U);
     const Q16_16 tip_held = bench.box.outputs().tip_path_mm;
     SCOPEKIN_EXPECT_TRUE(tip_held - tip_before < Q16_16::from_int(2));
     // It returns: the flags clear and a BoxStatus says so within 3 periods.
@@ -201,13 +219,13 @@ SCOPEKIN_TEST(SensorBox, ErrorFramesAndBusOffAreCountedReportedAndRecovered) {
     bench.wire.box().set_bus_off(true);
     Published out = bench.period();
     SCOPEKIN_EXPECT_EQ(out.estimates, 0);  // nothing leaves a bus-off controller
-    SCOPEKIN_EXPECT_TRUE((bench.box.driver_faults() & executive::kFaultBusOff) != 0U);
+    SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultBusOff) != 0U);
     SCOPEKIN_EXPECT_TRUE(bench.box.can_health().state() == protocol::CanState::bus_off);
     for (int k = 0; k < 5; ++k) {
         (void)bench.period();
     }
     // Sends fail after the period's faults are taken: they show from the next period on.
-    SCOPEKIN_EXPECT_TRUE((bench.box.driver_faults() & executive::kFaultSendFailed) != 0U);
+    SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultSendFailed) != 0U);
     // The controller restarts (e.g. the kernel's restart-ms).
     bench.wire.box().set_bus_off(false);
     bench.wire.box().inject_error(hal::kCanErrorRestarted);
@@ -284,5 +302,82 @@ SCOPEKIN_TEST(SensorBox, GarbageChangesNothingButCounters) {
     SCOPEKIN_EXPECT_EQ(noisy.box.counters().unknown_ids, garbage_unknown);
     SCOPEKIN_EXPECT_EQ(noisy.box.handle_sensors().counters().bad_length, garbage_bad_length);
     SCOPEKIN_EXPECT_EQ(noisy.box.handle_sensors().counters().counter_gaps, 0U);
-    SCOPEKIN_EXPECT_TRUE((noisy.box.driver_faults() & (executive::kFaultUnknownId | executive::kFaultBadLength)) != 0U);
+    SCOPEKIN_EXPECT_TRUE((noisy.box.box_faults() & (messages::kBoxFaultUnknownId | messages::kBoxFaultBadLength)) != 0U);
+}
+
+SCOPEKIN_TEST(SensorBox, TrackerSamplesReachTheEstimatorInput) {
+    Bench& bench = bench_tracker;
+    bench.start(&tracker_line);
+    (void)bench.period();
+    // Nothing from the tracker yet: every source stale, nothing valid, nothing fresh.
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().valid_mask, 0U);
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().stale_mask, messages::kEmAllSources);
+    SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultTrackerStale) != 0U);
+
+    scopekin::protocol::EmPoseMessage pose{};
+    pose.device_time_us = 1000;
+    pose.sensor_id = 3;  // sigmoid
+    pose.position_um = {12500, -2000, 30000};
+    pose.orientation_q14 = {16384, 0, 0, 0};
+    tracker_sends(pose, scopekin::protocol::encode_em_pose);
+    scopekin::protocol::TipForceMessage force{};
+    force.device_time_us = 1000;
+    force.force_mN = {0, 0, 1500};
+    tracker_sends(force, scopekin::protocol::encode_tip_force);
+    (void)bench.period();
+    const scopekin::kinetics::TrackerInputs& tracker = bench.box.tracker_inputs();
+    constexpr std::uint8_t kSent = messages::kEmSourceSigmoid | messages::kEmSourceTipForce;
+    SCOPEKIN_EXPECT_EQ(tracker.fresh_mask, kSent);
+    SCOPEKIN_EXPECT_EQ(tracker.valid_mask, kSent);
+    SCOPEKIN_EXPECT_EQ(tracker.pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());  // 12.5 mm
+    SCOPEKIN_EXPECT_EQ(tracker.pose[3].position_mm[2].raw(), Q16_16::from_int(30).raw());
+    SCOPEKIN_EXPECT_EQ(tracker.pose[3].receive_time_us, bench.clock.now_us());
+    SCOPEKIN_EXPECT_EQ(tracker.tip_force.force_N[2].raw(), Q16_16::from_ratio(3, 2).raw());  // 1.5 N
+
+    // The next period: held, no longer fresh.
+    (void)bench.period();
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().fresh_mask, 0U);
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().valid_mask, kSent);
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());
+
+    // A flagged sample (device status) changes nothing the estimator sees; a corrupted frame is a
+    // framing fault in both of the box's fault signals.
+    pose.device_time_us = 2000;
+    pose.status = scopekin::protocol::kEmStatusDisconnected;
+    pose.position_um = {0, 0, 0};
+    tracker_sends(pose, scopekin::protocol::encode_em_pose);
+    std::array<std::uint8_t, scopekin::protocol::kEmTrackerMaxFrameSize> corrupted{};
+    force.device_time_us = 2000;
+    const std::size_t size = scopekin::protocol::encode_tip_force(force, corrupted);
+    corrupted[size - 1U] = static_cast<std::uint8_t>(corrupted[size - 1U] ^ 0xFFU);  // CRC wrong
+    (void)tracker_line.device_write(std::span<const std::uint8_t>{corrupted.data(), size});
+    (void)bench.period();
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().fresh_mask, 0U);
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());
+    SCOPEKIN_EXPECT_TRUE((bench.box.tracker_faults() & messages::kTrackerFaultDeviceStatus) != 0U);
+    SCOPEKIN_EXPECT_TRUE((bench.box.tracker_faults() & messages::kTrackerFaultFraming) != 0U);
+    SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultSerialFraming) != 0U);
+}
+
+// The one place the EM tracker's and the estimator's flags become the wire's fault bits.
+SCOPEKIN_TEST(BoxFaults, MappingsFollowTheDbc) {
+    using namespace scopekin::messages;
+    // TrackerFaults: bits 0..5 are the sample checks, 6 framing, 7 the link.
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultStale), kTrackerFaultStale);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultTimestamp), kTrackerFaultDeviceTime);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultDeviceStatus), kTrackerFaultDeviceStatus);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultBadChecksum), kTrackerFaultFraming);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultBufferOverflow), kTrackerFaultFraming);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultSerial), kTrackerFaultLink);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultQueueOverflow), kTrackerFaultLink);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(0xFFFU), 0xFFU);
+    // DriverFaults: framing and staleness of the tracker; its sample checks are not the box's.
+    SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultUnknownType), kBoxFaultSerialFraming);
+    SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultStale), kBoxFaultTrackerStale);
+    SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultOutOfRange | kEmFaultSerial), 0U);
+    // KineticEstimate: InputsStale for a held handle signal, DepthClamped for a limited depth.
+    SCOPEKIN_EXPECT_TRUE(inputs_stale(scopekin::kinetics::kFaultRollStale));
+    SCOPEKIN_EXPECT_TRUE(!inputs_stale(scopekin::kinetics::kFaultForceRange));
+    SCOPEKIN_EXPECT_TRUE(depth_clamped(scopekin::kinetics::kFaultInsertionJump));
+    SCOPEKIN_EXPECT_TRUE(!depth_clamped(scopekin::kinetics::kFaultInsertionStale));
 }

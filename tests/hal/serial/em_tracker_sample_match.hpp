@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "em_tracker_stream.hpp"
-#include "hal/drivers/em_tracker_driver.hpp"
+#include "drivers/em_tracker_driver.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
 
 namespace scopekin::test {
@@ -22,7 +22,7 @@ inline std::int32_t thousandths_to_q16_raw(std::int32_t value) {
     return static_cast<std::int32_t>(scaled < 0 ? -rounded : rounded);
 }
 
-inline bool pose_matches(const hal::EmPoseSample& sample, const protocol::EmPoseMessage& message) {
+inline bool pose_matches(const messages::EmPoseSample& sample, const protocol::EmPoseMessage& message) {
     bool same = sample.sensor_id == message.sensor_id &&
                 sample.device_time_us == message.device_time_us &&
                 sample.device_status == message.status;
@@ -36,7 +36,7 @@ inline bool pose_matches(const hal::EmPoseSample& sample, const protocol::EmPose
     return same;
 }
 
-inline bool tip_force_matches(const hal::TipForceSample& sample,
+inline bool tip_force_matches(const messages::TipForceSample& sample,
                               const protocol::TipForceMessage& message) {
     bool same = sample.device_time_us == message.device_time_us &&
                 sample.device_status == message.status;
@@ -47,12 +47,12 @@ inline bool tip_force_matches(const hal::TipForceSample& sample,
 }
 
 /// A valid sample (no fault flag) of the right kind that carries exactly `expected`.
-inline bool sample_matches(const hal::EmTrackerSample& sample, const ExpectedEmMessage& expected) {
+inline bool sample_matches(const messages::EmTrackerSample& sample, const ExpectedEmMessage& expected) {
     if (expected.type == protocol::EmTrackerMessageType::pose) {
-        return sample.kind == hal::EmTrackerSampleKind::pose && sample.pose.fault_flags == 0U &&
+        return sample.kind == messages::EmTrackerSampleKind::pose && sample.pose.fault_flags == 0U &&
                pose_matches(sample.pose, expected.pose);
     }
-    return sample.kind == hal::EmTrackerSampleKind::tip_force &&
+    return sample.kind == messages::EmTrackerSampleKind::tip_force &&
            sample.tip_force.fault_flags == 0U && tip_force_matches(sample.tip_force, expected.tip_force);
 }
 

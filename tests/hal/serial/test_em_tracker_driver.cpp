@@ -11,7 +11,7 @@
 #include "em_tracker_sample_match.hpp"
 #include "em_tracker_stream.hpp"
 #include "em_tracker_test_bytes.hpp"
-#include "hal/drivers/em_tracker_driver.hpp"
+#include "drivers/em_tracker_driver.hpp"
 #include "hal/serial_port.hpp"
 #include "portable_check.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
@@ -19,21 +19,22 @@
 namespace {
 
 using scopekin::fixed_point::Q16_16;
-using scopekin::hal::EmPoseSample;
-using scopekin::hal::EmSensor;
-using scopekin::hal::EmTrackerDriver;
-using scopekin::hal::EmTrackerDriverConfig;
-using scopekin::hal::EmTrackerSample;
-using scopekin::hal::EmTrackerSampleKind;
+using scopekin::messages::EmPoseSample;
+using scopekin::messages::EmSensor;
+using scopekin::drivers::EmTrackerDriver;
+using scopekin::drivers::EmTrackerDriverConfig;
+using scopekin::messages::EmTrackerSample;
+using scopekin::messages::EmTrackerSampleKind;
 using scopekin::hal::SerialCounters;
 using scopekin::hal::SerialPort;
 using scopekin::hal::SerialStatus;
 using scopekin::hal::SerialTransfer;
-using scopekin::hal::TipForceSample;
+using scopekin::messages::TipForceSample;
 using scopekin::protocol::EmPoseMessage;
 using scopekin::protocol::TipForceMessage;
 using Bytes = std::span<const std::uint8_t>;
 namespace hal = scopekin::hal;
+namespace messages = scopekin::messages;
 using scopekin::test::kSpecPose;
 using scopekin::test::kSpecTipForce;
 using scopekin::test::pose_matches;
@@ -142,7 +143,7 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecPoseBecomesMillimetresAndUnitQuaternion) {
     SCOPEKIN_EXPECT_TRUE(g_driver.stale(EmSensor::twenty_cm));
     SCOPEKIN_EXPECT_TRUE(g_driver.tip_force_stale());
     SCOPEKIN_EXPECT_EQ(g_driver.stale_sources(), 0x1EU);
-    SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), std::uint32_t{hal::kEmFaultStale});
+    SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), std::uint32_t{messages::kEmFaultStale});
 }
 
 SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
@@ -169,7 +170,7 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.tip_force.force_N[0].raw(), thousandths_to_q16_raw(-32768));
     SCOPEKIN_EXPECT_EQ(g_sample.tip_force.force_N[1].raw(), thousandths_to_q16_raw(32767));
-    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{hal::kEmFaultOutOfRange});
+    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{messages::kEmFaultOutOfRange});
 }
 
 SCOPEKIN_TEST(EmTrackerDriver, UnknownSensorIsFlaggedCountedAndTouchesNoSensor) {
@@ -179,13 +180,13 @@ SCOPEKIN_TEST(EmTrackerDriver, UnknownSensorIsFlaggedCountedAndTouchesNoSensor) 
     (void)g_driver.service(g_port, 1U);
     for (int i = 0; i < 2; ++i) {
         SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-        SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{hal::kEmFaultUnknownSensor});
+        SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultUnknownSensor});
     }
     SCOPEKIN_EXPECT_EQ(g_driver.counters().unknown_sensor, 2U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().poses_ok, 0U);
     SCOPEKIN_EXPECT_EQ(g_driver.stale_sources(), 0x1FU);
     SCOPEKIN_EXPECT_TRUE(!g_driver.has_pose(EmSensor::tip));
-    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & hal::kEmFaultUnknownSensor) != 0U);
+    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & messages::kEmFaultUnknownSensor) != 0U);
 }
 
 SCOPEKIN_TEST(EmTrackerDriver, PositionRangeIsChecked) {
@@ -204,9 +205,9 @@ SCOPEKIN_TEST(EmTrackerDriver, PositionRangeIsChecked) {
     SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, 0U);
     SCOPEKIN_EXPECT_EQ(g_sample.pose.position_mm[0].raw(), 1000 * 65536);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{hal::kEmFaultOutOfRange});
+    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultOutOfRange});
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{hal::kEmFaultOutOfRange});
+    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultOutOfRange});
     // ±2147 m saturates to the Q16.16 limits: defined, flagged, never wraps.
     SCOPEKIN_EXPECT_TRUE(g_sample.pose.position_mm[0] == Q16_16::min());
     SCOPEKIN_EXPECT_TRUE(g_sample.pose.position_mm[1] == Q16_16::max());
@@ -225,8 +226,8 @@ SCOPEKIN_TEST(EmTrackerDriver, QuaternionMustBeUnit) {
         {16220, 0, 0, 0},       // norm² 0.980 (deviation 0.0199): inside 1 ± 0.02
         {16200, 0, 0, 0},       // norm² 0.978: outside
     }};
-    const std::uint32_t expected[] = {0U, 0U, hal::kEmFaultQuaternionNorm, hal::kEmFaultQuaternionNorm, 0U,
-                                      hal::kEmFaultQuaternionNorm};
+    const std::uint32_t expected[] = {0U, 0U, messages::kEmFaultQuaternionNorm, messages::kEmFaultQuaternionNorm, 0U,
+                                      messages::kEmFaultQuaternionNorm};
     for (std::size_t i = 0; i < quaternions.size(); ++i) {
         EmPoseMessage message = spec_pose(2U, static_cast<std::uint32_t>(100U + i));
         message.orientation_q14 = quaternions[i];
@@ -250,7 +251,7 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceTimeMustIncreaseModuloTheWrap) {
         0x0000'0080U,  // backwards: flagged (becomes the reference)
         0x0000'0090U,  // forward again from the new reference
     };
-    const std::uint32_t expected[] = {0U, 0U, hal::kEmFaultTimestamp, hal::kEmFaultTimestamp, 0U};
+    const std::uint32_t expected[] = {0U, 0U, messages::kEmFaultTimestamp, messages::kEmFaultTimestamp, 0U};
     for (const std::uint32_t time : times) {
         g_port.input.add_pose(spec_pose(3U, time));
     }
@@ -269,7 +270,7 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceTimeMustIncreaseModuloTheWrap) {
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, 0U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{hal::kEmFaultTimestamp});
+    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{messages::kEmFaultTimestamp});
     SCOPEKIN_EXPECT_EQ(g_driver.counters().timestamp_backwards, 3U);
     SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::sigmoid).device_time_us, 0x90U);
 }
@@ -284,10 +285,10 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceStatusIsFlagged) {
     g_port.input.add_tip_force(saturated);
     (void)g_driver.service(g_port, 1U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{hal::kEmFaultDeviceStatus});
+    SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultDeviceStatus});
     SCOPEKIN_EXPECT_EQ(g_sample.pose.device_status, 1U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{hal::kEmFaultDeviceStatus});
+    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{messages::kEmFaultDeviceStatus});
     SCOPEKIN_EXPECT_EQ(g_driver.counters().device_status, 2U);
     SCOPEKIN_EXPECT_TRUE(g_driver.stale(EmSensor::tip));  // a flagged sample does not refresh
     SCOPEKIN_EXPECT_TRUE(g_driver.tip_force_stale());
@@ -357,7 +358,7 @@ SCOPEKIN_TEST(EmTrackerDriver, ServiceWithTheHalClockStampsItsTime) {
 
 SCOPEKIN_TEST(EmTrackerDriver, OnlyMonitoredSourcesGoStale) {
     EmTrackerDriverConfig config;
-    config.monitored_sources = hal::kEmSourceTip | hal::kEmSourceTipForce;
+    config.monitored_sources = messages::kEmSourceTip | messages::kEmSourceTipForce;
     reset(config);
     SCOPEKIN_EXPECT_EQ(g_driver.stale_sources(), 0x11U);
     g_port.input.add_pose(spec_pose(0U, 1U));
@@ -385,18 +386,18 @@ SCOPEKIN_TEST(EmTrackerDriver, LinkFaultsAreFlaggedUntilTaken) {
     g_port.input.add_pose(spec_pose(0U, 1U));
     (void)g_driver.service(g_port, 0U);
     const std::uint32_t flags = g_driver.take_fault_flags();
-    SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultBadChecksum) != 0U);
-    SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultBadLength) != 0U);
-    SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultUnknownType) != 0U);
-    SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultStale) != 0U);  // 3 sensors + force never sent
-    SCOPEKIN_EXPECT_TRUE((flags & hal::kEmFaultSerial) == 0U);
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultBadChecksum) != 0U);
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultBadLength) != 0U);
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultUnknownType) != 0U);
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultStale) != 0U);  // 3 sensors + force never sent
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultSerial) == 0U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().link.bad_checksum, 1U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().link.bad_length, 1U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().link.unknown_type, 1U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().link.frames_ok, 1U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().poses_ok, 1U);
     // Taken: the events are gone, the stale condition is not.
-    SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), std::uint32_t{hal::kEmFaultStale});
+    SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), std::uint32_t{messages::kEmFaultStale});
 }
 
 SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
@@ -411,16 +412,16 @@ SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::closed);
     SCOPEKIN_EXPECT_EQ(result.bytes_read, 0U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().serial_closed, 1U);
-    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & hal::kEmFaultSerial) != 0U);
+    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & messages::kEmFaultSerial) != 0U);
     g_port.when_empty = SerialStatus::failed;
     result = g_driver.service(g_port, 2U);
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::failed);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().serial_errors, 1U);
-    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & hal::kEmFaultSerial) != 0U);
+    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & messages::kEmFaultSerial) != 0U);
     g_port.when_empty = SerialStatus::timeout;
     result = g_driver.service(g_port, 3U);
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::timeout);
-    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & hal::kEmFaultSerial) == 0U);
+    SCOPEKIN_EXPECT_TRUE((g_driver.take_fault_flags() & messages::kEmFaultSerial) == 0U);
 
     // A full chunk followed by a hang-up: the bytes count, the hang-up too.
     reset();
@@ -477,7 +478,7 @@ SCOPEKIN_TEST(EmTrackerDriver, QueueOverflowDropsTheOldest) {
     SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 40U);
     SCOPEKIN_EXPECT_EQ(g_driver.queued(), EmTrackerDriver::kSampleQueueCapacity);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().samples_dropped, 40U - EmTrackerDriver::kSampleQueueCapacity);
-    SCOPEKIN_EXPECT_TRUE((g_driver.fault_flags() & hal::kEmFaultQueueOverflow) != 0U);
+    SCOPEKIN_EXPECT_TRUE((g_driver.fault_flags() & messages::kEmFaultQueueOverflow) != 0U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.pose.device_time_us, 1000U + 40U - EmTrackerDriver::kSampleQueueCapacity);
     // The latest value is the newest sample, whatever the queue dropped.

@@ -27,13 +27,13 @@
 
 #include "em_tracker_sample_match.hpp"
 #include "em_tracker_stream.hpp"
-#include "hal/drivers/em_tracker_driver.hpp"
+#include "drivers/em_tracker_driver.hpp"
 #include "hal/posix_serial/posix_serial_port.hpp"
 
 namespace {
 
-using scopekin::hal::EmTrackerDriver;
-using scopekin::hal::EmTrackerSample;
+using scopekin::drivers::EmTrackerDriver;
+using scopekin::messages::EmTrackerSample;
 using scopekin::hal::PosixSerialPort;
 using scopekin::hal::SerialPort;
 using scopekin::hal::SerialStatus;
@@ -345,5 +345,5 @@ TEST(EmTrackerOverPty, DriverOutputMatchesTheValidFramesExactly) {
     const auto result = driver.service(serial, now_us());
     EXPECT_EQ(result.status, SerialStatus::closed);
     EXPECT_EQ(driver.counters().serial_closed, 1U);
-    EXPECT_NE(driver.take_fault_flags() & scopekin::hal::kEmFaultSerial, 0U);
+    EXPECT_NE(driver.take_fault_flags() & scopekin::messages::kEmFaultSerial, 0U);
 }

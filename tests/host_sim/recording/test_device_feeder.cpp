@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "hal/drivers/em_tracker_driver.hpp"
-#include "hal/drivers/handle_sensors.hpp"
+#include "drivers/em_tracker_driver.hpp"
+#include "drivers/handle_sensors.hpp"
 #include "hal/loopback/loopback_can.hpp"
 #include "hal/loopback/loopback_serial.hpp"
 #include "hal/loopback/simulated_clock.hpp"
@@ -21,6 +21,8 @@
 namespace {
 
 namespace hal = scopekin::hal;
+namespace drivers = scopekin::drivers;
+namespace messages = scopekin::messages;
 namespace protocol = scopekin::protocol;
 namespace wire = scopekin::recording::wire;
 using scopekin::fixed_point::Q16_16;
@@ -159,13 +161,13 @@ TEST(DeviceFeeder, HandleSensorsDriverTakesEveryFrameAndSeesDropoutsAsStaleness)
       feeder.feed(row);
       for (const auto& frame : drain(b.wire.box())) accepted += driver.accept(frame) ? 1 : 0;
       if (ms % 5 == 4) {
-        const auto inputs = driver.take_inputs(b.clock.now_us());
+        const messages::HandleSamples samples = driver.take_samples(b.clock.now_us());
         const RecordingRow expected = wire::quantize_to_wire(row);
-        EXPECT_EQ(inputs.insertion_mm, wire::to_insertion_roll(*expected.insertion_roll, 0).insertion_mm) << ms;
-        EXPECT_EQ(inputs.roll_rad, wire::to_insertion_roll(*expected.insertion_roll, 0).roll_rad) << ms;
+        EXPECT_EQ(samples.insertion_roll.insertion_mm, wire::to_insertion_roll(*expected.insertion_roll, 0).insertion_mm) << ms;
+        EXPECT_EQ(samples.insertion_roll.roll_rad, wire::to_insertion_roll(*expected.insertion_roll, 0).roll_rad) << ms;
         if (with_force) {
-          EXPECT_EQ(inputs.handle_force_N, wire::to_handle_force_torque(*expected.handle, 0).force_N) << ms;
-          EXPECT_EQ(inputs.handle_torque_Nmm, wire::to_handle_force_torque(*expected.handle, 0).torque_Nmm) << ms;
+          EXPECT_EQ(samples.force_torque.force_N, wire::to_handle_force_torque(*expected.handle, 0).force_N) << ms;
+          EXPECT_EQ(samples.force_torque.torque_Nmm, wire::to_handle_force_torque(*expected.handle, 0).torque_Nmm) << ms;
         }
       }
     }
@@ -181,7 +183,7 @@ TEST(DeviceFeeder, HandleSensorsDriverTakesEveryFrameAndSeesDropoutsAsStaleness)
 
   // 40 ms without force/torque in the recording: stale (15 ms default), never a counter gap.
   run_ms(200, 240, false);
-  EXPECT_NE(driver.faults() & scopekin::drivers::kForceTorqueStale, 0);
+  EXPECT_NE(driver.faults() & scopekin::messages::kBoxFaultForceTorqueStale, 0);
   run_ms(240, 260, true);
   EXPECT_EQ(driver.counters().counter_gaps, 0u);
   EXPECT_EQ(driver.counters().stale_events, 1u);
@@ -193,7 +195,7 @@ TEST(DeviceFeeder, HandleSensorsDriverTakesEveryFrameAndSeesDropoutsAsStaleness)
 TEST(DeviceFeeder, EmTrackerDriverTakesEveryPoseAndTipForce) {
   Bench& b = bench_em_driver;
   DeviceFeeder feeder(b.wire.world(), b.serial, &b.clock);
-  hal::EmTrackerDriver driver;
+  drivers::EmTrackerDriver driver;
   std::uint32_t samples = 0;
   for (int k = 0; k < 60; ++k) {  // 2 s at the bench's 33 ms
     RecordingRow row = full_row(33'000 * k, k);
@@ -202,12 +204,12 @@ TEST(DeviceFeeder, EmTrackerDriverTakesEveryPoseAndTipForce) {
     feeder.feed(row);
     const auto result = driver.service(b.serial, b.clock);
     samples += result.samples;
-    hal::EmTrackerSample sample{};
-    while (driver.pop(sample)) EXPECT_EQ(sample.kind == hal::EmTrackerSampleKind::pose ? sample.pose.fault_flags
+    messages::EmTrackerSample sample{};
+    while (driver.pop(sample)) EXPECT_EQ(sample.kind == messages::EmTrackerSampleKind::pose ? sample.pose.fault_flags
                                                                                        : sample.tip_force.fault_flags,
                                          0u);
     for (std::size_t slot = 0; slot < 4; ++slot) {
-      const auto sensor = static_cast<hal::EmSensor>(slot);
+      const auto sensor = static_cast<messages::EmSensor>(slot);
       ASSERT_TRUE(driver.has_pose(sensor));
       const auto& pose = driver.latest_pose(sensor);
       for (std::size_t i = 0; i < 3; ++i)

@@ -1,7 +1,7 @@
 // handle_sensors.hpp — driver of the handle's CAN sensors (force/torque cell 0x110, insertion/
 // roll encoder 0x111): decodes frames, validates them and keeps the latest valid sample of each,
-// time-stamped with the frame's receive time; turns them into the estimator's Inputs once per
-// period.
+// time-stamped with the frame's receive time; publishes them once per period as
+// messages::HandleSamples (the executive turns those into the estimator's Inputs).
 //
 // Validation of each frame (each fault counted, and flagged for the period it happened in):
 //   bad length     DLC differs from scopekin.dbc
@@ -13,7 +13,7 @@
 // driver's (accept() returns false) — the executive counts unknown identifiers.
 //
 // Staleness: a sensor whose last valid sample is older than `stale_after_us` is stale (its
-// DriverFault bit is set each period until a valid sample arrives; each onset counts one stale
+// BoxFault bit is set each period until a valid sample arrives; each onset counts one stale
 // event).  The estimator sees a signal as fresh only in the period a new valid sample arrived,
 // and holds its last value otherwise (kinetics.hpp "Bad input").
 #pragma once
@@ -21,7 +21,8 @@
 #include <cstdint>
 
 #include "hal/can_bus.hpp"
-#include "kinetics/kinetics_io.hpp"
+#include "messages/box_faults.hpp"
+#include "messages/handle_samples.hpp"
 #include "protocol/can/scopekin_messages.hpp"
 
 namespace scopekin::drivers {
@@ -40,16 +41,6 @@ struct HandleSensorCounters {
     std::uint32_t stale_events{0};          ///< times a sensor went stale
 };
 
-/// This period's problems (bits), read by the executive after take_inputs().
-enum HandleSensorFault : std::uint8_t {
-    kForceTorqueStale = 1U << 0U,
-    kInsertionRollStale = 1U << 1U,
-    kBadLength = 1U << 2U,
-    kOutOfRange = 1U << 3U,
-    kSensorStatus = 1U << 4U,
-    kCounterGap = 1U << 5U,
-};
-
 class HandleSensors {
 public:
     explicit HandleSensors(const HandleSensorConfig& config = {}) : config_(config) {}
@@ -58,34 +49,34 @@ public:
     /// or not), false if it belongs to someone else.
     bool accept(const hal::ReceivedCanFrame& received);
 
-    /// The estimator's inputs for the period released at `now_us`: the held samples, fresh bits
-    /// for sensors that delivered a valid sample since the last call.  Updates staleness.
-    [[nodiscard]] kinetics::Inputs take_inputs(std::uint64_t now_us);
+    /// The samples of the period released at `now_us`: the held samples, fresh for sensors that
+    /// delivered a valid sample since the last call.  Updates staleness.
+    [[nodiscard]] messages::HandleSamples take_samples(std::uint64_t now_us);
 
-    /// HandleSensorFault bits of the period closed by the last take_inputs().
-    [[nodiscard]] std::uint8_t faults() const { return faults_; }
+    /// messages::BoxFault bits of the period closed by the last take_samples().
+    [[nodiscard]] std::uint16_t faults() const { return faults_; }
     [[nodiscard]] const HandleSensorCounters& counters() const { return counters_; }
 
 private:
     struct Channel {
         bool seen{false};          ///< a valid sample arrived at least once
-        bool fresh{false};         ///< ... since the last take_inputs()
+        bool fresh{false};         ///< ... since the last take_samples()
         bool stale{true};
         bool counter_known{false};
         std::uint8_t last_counter{0};
         std::uint64_t last_sample_us{0};
     };
     void note_counter(Channel& channel, std::uint8_t counter);
-    void update_staleness(Channel& channel, std::uint64_t now_us, std::uint8_t stale_bit);
+    void update_staleness(Channel& channel, std::uint64_t now_us, std::uint16_t stale_bit);
 
     HandleSensorConfig config_;
     HandleSensorCounters counters_{};
     Channel force_torque_{};
     Channel insertion_roll_{};
-    protocol::HandleForceTorque force_torque_sample_{};
-    protocol::InsertionRoll insertion_roll_sample_{};
-    std::uint8_t pending_faults_{0};  ///< gathered by accept() during the period
-    std::uint8_t faults_{0};
+    messages::ForceTorqueSample force_torque_sample_{};
+    messages::InsertionRollSample insertion_roll_sample_{};
+    std::uint16_t pending_faults_{0};  ///< gathered by accept() during the period
+    std::uint16_t faults_{0};
 };
 
 }  // namespace scopekin::drivers

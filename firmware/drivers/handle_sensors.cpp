@@ -1,5 +1,5 @@
 // handle_sensors.cpp — see handle_sensors.hpp.
-#include "hal/drivers/handle_sensors.hpp"
+#include "drivers/handle_sensors.hpp"
 
 namespace scopekin::drivers {
 
@@ -7,13 +7,15 @@ namespace {
 constexpr std::uint8_t kCounterModulo = 16;  // 4-bit rolling counters
 }  // namespace
 
+using namespace messages;  // the BoxFault bits this driver sets
+
 void HandleSensors::note_counter(Channel& channel, std::uint8_t counter) {
     if (channel.counter_known) {
         const auto expected = static_cast<std::uint8_t>((channel.last_counter + 1U) % kCounterModulo);
         if (counter != expected) {
             counters_.counter_gaps +=
                 static_cast<std::uint32_t>((counter + kCounterModulo - expected) % kCounterModulo);
-            pending_faults_ |= kCounterGap;
+            pending_faults_ |= kBoxFaultCounterGap;
         }
     }
     channel.counter_known = true;
@@ -37,7 +39,7 @@ bool HandleSensors::accept(const hal::ReceivedCanFrame& received) {
             status = message.status;
             counter = message.counter;
             if (status == 0U) {
-                force_torque_sample_ = message;
+                force_torque_sample_ = {message.force_N, message.torque_Nmm, received.timestamp_us};
                 ++counters_.force_torque_samples;
             }
         }
@@ -49,7 +51,8 @@ bool HandleSensors::accept(const hal::ReceivedCanFrame& received) {
             status = message.status;
             counter = message.counter;
             if (status == 0U) {
-                insertion_roll_sample_ = message;
+                insertion_roll_sample_ = {message.insertion_mm, message.roll_rad,
+                                          received.timestamp_us};
                 ++counters_.insertion_roll_samples;
             }
         }
@@ -61,7 +64,7 @@ bool HandleSensors::accept(const hal::ReceivedCanFrame& received) {
             note_counter(*channel, counter);
             if (status != 0U) {
                 ++counters_.sensor_status;
-                pending_faults_ |= kSensorStatus;
+                pending_faults_ |= kBoxFaultSensorStatus;
             } else {
                 channel->seen = true;
                 channel->fresh = true;
@@ -70,20 +73,20 @@ bool HandleSensors::accept(const hal::ReceivedCanFrame& received) {
             break;
         case protocol::DecodeResult::bad_length:
             ++counters_.bad_length;
-            pending_faults_ |= kBadLength;
+            pending_faults_ |= kBoxFaultBadLength;
             break;
         case protocol::DecodeResult::out_of_range:
         case protocol::DecodeResult::wrong_id:
         case protocol::DecodeResult::not_data:
             ++counters_.out_of_range;
-            pending_faults_ |= kOutOfRange;
+            pending_faults_ |= kBoxFaultOutOfRange;
             break;
     }
     return true;
 }
 
 void HandleSensors::update_staleness(Channel& channel, std::uint64_t now_us,
-                                     std::uint8_t stale_bit) {
+                                     std::uint16_t stale_bit) {
     // A receive timestamp after `now_us` (clock domains differ by a few µs) counts as age 0.
     const bool stale = !channel.seen || (now_us > channel.last_sample_us &&
                                          now_us - channel.last_sample_us > config_.stale_after_us);
@@ -97,26 +100,20 @@ void HandleSensors::update_staleness(Channel& channel, std::uint64_t now_us,
     }
 }
 
-kinetics::Inputs HandleSensors::take_inputs(std::uint64_t now_us) {
+HandleSamples HandleSensors::take_samples(std::uint64_t now_us) {
     faults_ = pending_faults_;
     pending_faults_ = 0;
-    update_staleness(force_torque_, now_us, kForceTorqueStale);
-    update_staleness(insertion_roll_, now_us, kInsertionRollStale);
+    update_staleness(force_torque_, now_us, kBoxFaultForceTorqueStale);
+    update_staleness(insertion_roll_, now_us, kBoxFaultEncoderStale);
 
-    kinetics::Inputs inputs{};
-    inputs.handle_force_N = force_torque_sample_.force_N;
-    inputs.handle_torque_Nmm = force_torque_sample_.torque_Nmm;
-    inputs.insertion_mm = insertion_roll_sample_.insertion_mm;
-    inputs.roll_rad = insertion_roll_sample_.roll_rad;
-    if (force_torque_.fresh) {
-        inputs.fresh_mask |= kinetics::kHandleForce | kinetics::kHandleTorque;
-    }
-    if (insertion_roll_.fresh) {
-        inputs.fresh_mask |= kinetics::kInsertion | kinetics::kRoll;
-    }
+    HandleSamples samples{};
+    samples.force_torque = force_torque_sample_;
+    samples.insertion_roll = insertion_roll_sample_;
+    samples.force_torque_fresh = force_torque_.fresh;
+    samples.insertion_roll_fresh = insertion_roll_.fresh;
     force_torque_.fresh = false;
     insertion_roll_.fresh = false;
-    return inputs;
+    return samples;
 }
 
 }  // namespace scopekin::drivers

@@ -1,9 +1,9 @@
 // em_tracker_driver.cpp — frames -> validated, time-stamped EM tracker and tip force samples.
 // Behaviour per fault: firmware/protocol/em_tracker/em_tracker_serial.md §4; conversions and
 // their scaling: em_tracker_driver.hpp.
-#include "hal/drivers/em_tracker_driver.hpp"
+#include "drivers/em_tracker_driver.hpp"
 
-namespace scopekin::hal {
+namespace scopekin::drivers {
 namespace {
 
 constexpr std::size_t kTipForceSource = kEmSensorCount;  // index 4
@@ -53,7 +53,7 @@ EmTrackerServiceResult EmTrackerDriver::service(SerialPort& port, std::uint64_t 
     EmTrackerServiceResult result;
     std::array<std::uint8_t, kReadChunkBytes> chunk{};
     for (std::size_t read = 0; read < kReadsPerService; ++read) {  // bound: kReadsPerService
-        const SerialTransfer transfer = port.read(chunk, 0);
+        const hal::SerialTransfer transfer = port.read(chunk, 0);
         if (transfer.status == SerialStatus::ok) {
             // A backend that claims more than it was given is clamped, never trusted.
             const std::size_t count = transfer.count < chunk.size() ? transfer.count : chunk.size();
@@ -344,4 +344,4 @@ EmTrackerDriverCounters EmTrackerDriver::counters() const noexcept {
     return result;
 }
 
-}  // namespace scopekin::hal
+}  // namespace scopekin::drivers
