@@ -50,7 +50,7 @@ using namespace messages;  // the samples and fault flags this driver publishes
 
 struct EmTrackerDriverConfig {
     /// A monitored source with no valid sample for longer than this is stale.  Default: 100 ms,
-    /// three periods of the bench's 30 Hz streams (PHYSICS.md §6), so one late or corrupted frame
+    /// three periods of the bench's 30 Hz streams (model/PHYSICS.md §6), so one late or corrupted frame
     /// never flags a sensor but a sensor that stopped is flagged within 0.1 s.
     std::uint32_t stale_timeout_us{100'000};
     /// Largest accepted |x|, |y|, |z| of a position, µm (default 1 m).

@@ -75,7 +75,7 @@ struct Config {
     InputLimits limits{};
     monitors::AdvanceEfficiency<>::Config efficiency{};
     /// Self-lock: raised after the tip station has stuck for 36 steps (0.18 s) while the hand
-    /// advances (README "Alarms": the reference model's tip stalls up to 31 steps in stick-slip
+    /// advances (firmware/README.md, "Alarms": the reference model's tip stalls up to 31 steps in stick-slip
     /// where no loop forms, and 41 steps at the first stall of the sigmoid loop).
     monitors::SelfLockMonitor::Config self_lock{kSelfLockConfig};
     monitors::ContactForceMonitor::Config contact_force{};

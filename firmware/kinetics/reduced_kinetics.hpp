@@ -59,7 +59,7 @@
 // — knots 1 mm apart (0.05 s at 20 mm/s) follow the full-order model's stick-slip. Away from the
 // training runs it deviates only through the contact solve (stations sticking where the training
 // slid, slipping backwards on a reversal), elastically and locally, u = W (f - f_ref); there its
-// error grows with the distance from the training (README "Firmware accuracy": measured on a
+// error grows with the distance from the training (firmware/README.md, "Firmware accuracy": measured on a
 // procedure it was not trained on).
 // Because W is block diagonal the station problems are independent: the Gauss-Seidel solve
 // (the one solver, ContactProblem::block_diagonal set) is exact after one sweep.

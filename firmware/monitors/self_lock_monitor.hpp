@@ -4,8 +4,8 @@
 //   monitor.init(config);                               // once; false = config rejected
 //   SelfLockMonitor::Outputs out = monitor.step(in);    // every period (5 ms)
 //
-// Physics (PHYSICS.md §1, thesis 2.2.1, Eq. 2.1)
-// ----------------------------------------------
+// Physics (model/PHYSICS.md §1, thesis 2.2.1, Eq. 2.1-2.4)
+// --------------------------------------------------------
 // Looping starts with self-locking: a contact near the distal end goes into *stick*.  Its
 // driving-force angle alpha, tan(alpha) = ||[f_t f_s]|| / |f_n|, is then below the friction
 // angle beta = atan(mu_s).  Pushing at the handle stops advancing the tip and starts to stretch
@@ -58,7 +58,7 @@
 //   The efficiency confirms (< 0.5) about 26 steps (0.13 s) after a dead stop of the tip.
 //   The kinetic estimator (kinetics.hpp, kSelfLockConfig) sets on_steps = 36 instead: in the
 //   reference model the tip stalls for up to 31 steps in the stick-slip of a normal advance, so
-//   20 would raise the alarm where no loop forms (README "Alarms"). Its latency is then 0.175 s
+//   20 would raise the alarm where no loop forms (firmware/README.md, "Alarms"). Its latency is then 0.175 s
 //   with the hand pushing, at most 0.22 s from rest.
 //
 // False alarms kept out

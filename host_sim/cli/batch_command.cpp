@@ -302,7 +302,7 @@ void add_batch_commands(CLI::App& app) {
       "line, relative to the manifest; '#' starts a comment) that fall in shard I of N: an entry belongs to shard "
       "FNV-1a-64(entry as written) mod N, so the assignment depends on the entry alone. Each entry gets its own "
       "folder in DIR; DIR/summary_shard_I_of_N.csv has one row per entry. Run the N shards as an array job "
-      "(README 'Batch runs': Slurm, Kubernetes) and combine them with `scopekin batch-merge`. Exit status: the "
+      "(host_sim/README.md, 'Batch runs on a cluster': Slurm, Kubernetes) and combine them with `scopekin batch-merge`. Exit status: the "
       "worst of the entries' (0 all done, 1 a run failed, 2 invalid manifest/entry, 3 an output cannot be "
       "written).");
   cmd->add_option("manifest", options->manifest, "Manifest file")->required()->check(CLI::ExistingFile);

@@ -30,7 +30,7 @@ struct DiscrepancyOptions {
   bool thesis_cantilever = false;
 };
 
-/// The static real-data case (README "Discrepancy workflow"): report.json and report.md.
+/// The static real-data case (host_sim/discrepancy/README.md): report.json and report.md.
 int run_thesis_cantilever_case(const DiscrepancyOptions& o) {
   try {
     const fs::path dir(o.out);
@@ -206,8 +206,8 @@ void add_discrepancy_command(CLI::App& app) {
   auto options = std::make_shared<DiscrepancyOptions>();
   CLI::App* cmd = app.add_subcommand(
       "discrepancy",
-      "Find where a model and a recording disagree and name the missing physical effect (README 'Discrepancy "
-      "workflow'): drives the model with the recording's insertion and roll, compares the measured outputs (EM positions "
+      "Find where a model and a recording disagree and name the missing physical effect (host_sim/discrepancy/"
+      "README.md): drives the model with the recording's insertion and roll, compares the measured outputs (EM positions "
       "of the tip, the 20 cm point and the sigmoid, the tip force, the handle force and torque) against the noise "
       "estimated from the data, fits each candidate effect (then pairs) on training blocks and judges them on held-out "
       "blocks (a recording longer than the fit budget on one window per block, the named effects then over all of "
@@ -216,7 +216,7 @@ void add_discrepancy_command(CLI::App& app) {
       "scenario can use it with \"model\": \"DIR/model.json\") and DIR/series.csv. With --thesis-cantilever, the "
       "thesis's measured cantilever as a static case instead (report.json, report.md). Exit status 0 done, 2 a recording "
       "or model it cannot use (the message says what is needed), 3 an output cannot be written.");
-  cmd->add_option("recording", options->recording, "Recording CSV file (README 'Recording schema')")
+  cmd->add_option("recording", options->recording, "Recording CSV file (host_sim/recording/RECORDING.md)")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--thesis-cantilever", options->thesis_cantilever,
                 "Instead of a recording: the static real-data case, the thesis's measured cantilever (Table 4.2): one EI "

@@ -1,5 +1,5 @@
 #pragma once
-// A live simulation written to a run folder (README "Simulator outputs"): recording.csv,
+// A live simulation written to a run folder (host_sim/README.md, "Commands"): recording.csv,
 // world.csv, firmware.csv, snapshots.json and summary.json. Used by `simulate` (world
 // scenarios) and `demo`. Files are written as NAME.part; a run that fails leaves
 // NAME.incomplete.csv and a summary with status "failed".

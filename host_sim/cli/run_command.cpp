@@ -94,7 +94,7 @@ void add_run_command(CLI::App& app) {
   auto options = std::make_shared<RunOptions>();
   CLI::App* cmd = app.add_subcommand(
       "run",
-      "Feed a recording (CSV, README 'Recording schema'; `scopekin simulate` writes one) through the unmodified "
+      "Feed a recording (CSV, host_sim/recording/RECORDING.md; `scopekin simulate` writes one) through the unmodified "
       "firmware: its rows become the CAN frames and serial bytes the box receives, at their times; the box runs "
       "every 5 ms. Writes DIR/firmware.csv (the box's outputs per period) and DIR/summary.json (alarms, gaps). A "
       "malformed recording is refused with its line and column (exit 2); a gap in the handle signals is flagged, "

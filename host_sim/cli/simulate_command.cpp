@@ -118,10 +118,10 @@ void add_simulate_command(CLI::App& app) {
   auto options = std::make_shared<SimulateOptions>();
   CLI::App* cmd = app.add_subcommand(
       "simulate",
-      "Run a scenario file (schema in README 'Scenario files'). A world scenario is simulated live: the scope in "
+      "Run a scenario file (schema in model/scenario/README.md). A world scenario is simulated live: the scope in "
       "the colon driven by the procedure (with the scenario's truth effects), read by the sensor models every 1 ms, "
       "and the unmodified firmware fed with what they deliver every 5 ms. Writes DIR/recording.csv (what the "
-      "sensors delivered, README 'Recording schema'), DIR/world.csv (the true state at outputs.sample_rate_Hz), "
+      "sensors delivered, host_sim/recording/RECORDING.md), DIR/world.csv (the true state at outputs.sample_rate_Hz), "
       "DIR/firmware.csv (the box's outputs per period), DIR/snapshots.json and DIR/summary.json. A free beam "
       "scenario is solved statically: DIR/recording.csv has one row per output node. While running, CSV files "
       "are NAME.part; a run that fails leaves NAME.incomplete.csv and a summary with status \"failed\". Exit "

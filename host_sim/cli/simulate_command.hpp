@@ -1,5 +1,5 @@
 #pragma once
-// `scopekin simulate SCENARIO.json --out DIR`: runs a scenario file (README "Scenario files"): a
+// `scopekin simulate SCENARIO.json --out DIR`: runs a scenario file (model/scenario/README.md): a
 // world scenario live through the sensors and the firmware (recording.csv, world.csv,
 // firmware.csv, snapshots.json, summary.json), a free beam scenario statically.
 #include <CLI/CLI.hpp>

@@ -69,7 +69,7 @@ void add_static_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "static",
       "Solve a static large-deflection beam problem file (a free scope with loads and supports, no colon; "
-      "schema in README 'Beam problem files'). Prints the Newton convergence per load step and the node poses; "
+      "schema in model/README.md, 'Beam problem files'). Prints the Newton convergence per load step and the node poses; "
       "exit status 0 if converged, 1 if not, 2 for an invalid file.");
   cmd->add_option("problem", options->problem, "Beam problem JSON file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", options->out, "Also write the result as JSON to this file");

@@ -1,5 +1,5 @@
 #pragma once
-// firmware.csv: the box's estimator outputs, one row per period (README "Simulator outputs").
+// firmware.csv: the box's estimator outputs, one row per period (host_sim/README.md, "Commands").
 // Q16.16 values are printed with 5 decimals, enough to give back the raw value exactly
 // (|error| <= 5e-6 < half of 2^-16), so two files are equal exactly when the outputs are.
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
-// world.csv: the true state of the world at the scenario's output rate (README "Simulator
-// outputs"): the handle, the tip and the extra nodes, contact statistics by region, and where
+// world.csv: the true state of the world at the scenario's output rate (model/scenario/README.md,
+// "Outputs"): the handle, the tip and the extra nodes, contact statistics by region, and where
 // the tip is along the colon with the wall force on it.
 #include <ostream>
 #include <string>

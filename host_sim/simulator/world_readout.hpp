@@ -3,7 +3,7 @@
 // poses where the test bed's EM sensors sit, the tip's contact force, and where the tip is along
 // the colon. Positions in the colon (body) frame [mm], forces [N], torque [N mm], angles [rad].
 //
-// EM sensor poses (thesis test bed, PHYSICS.md Sec. 6): S1 the tip node, S2 the node 200 mm from
+// EM sensor poses (thesis test bed, model/PHYSICS.md §6): S1 the tip node, S2 the node 200 mm from
 // the tip, S3 the handle end of the shaft (node 0, where the box sits), S4 a point sutured on the
 // sigmoid (the colon centerline halfway along the sigmoid, displaced with the colon). A node's
 // orientation is the shortest rotation taking +x to the scope's axis there, then the handle's

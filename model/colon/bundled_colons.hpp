@@ -6,14 +6,14 @@ namespace scopekin::model {
 
 /// Default colon, anus to cecum, centerline sampled every 10 mm. Frame: origin at the anus,
 /// x to the patient's left, y cranial, z anterior (patient supine), mm.
-/// Dimensions (documented in README "Colon"):
+/// Dimensions (documented in model/PHYSICS.md §3.3):
 ///  - total length 1.60 m: CT colonography mean 150.3 +- 18.5 cm (Utano et al., Jpn J Radiol
 ///    2022;40:298); transverse the longest segment, then the sigmoid (cadaver study, Ann R Coll
 ///    Surg Engl 2015;97:439);
 ///  - a redundant sigmoid (40 cm) forming an anterior loop in the pelvis, the loop-prone case;
 ///    transverse 42 cm, descending 25 cm, ascending 15 cm, rectum 16 cm;
 ///  - lumen diameters: cecum/ascending ~46 mm, transverse ~44 mm, descending ~30 mm, sigmoid
-///    ~28 mm, narrowing to 25 mm at the sigmoid-descending junction (PHYSICS.md Sec. 3; CT median
+///    ~28 mm, narrowing to 25 mm at the sigmoid-descending junction (model/PHYSICS.md §3.3; CT median
 ///    diameters ascending 46 mm, descending 29 mm), rectum ~36 mm.
 ColonTube default_colon(double scope_radius_mm);
 

@@ -1,5 +1,5 @@
 #pragma once
-// The named regions of the colon, in order from the anus (thesis 4.3, PHYSICS.md Sec. 3), and
+// The named regions of the colon, in order from the anus (thesis 4.3, model/PHYSICS.md §3.2), and
 // their mechanical properties.
 #include <array>
 #include <optional>

@@ -1,6 +1,6 @@
 #pragma once
 // A static beam problem read from a JSON file: a free scope (or any beam) with its section,
-// loads and supports, and no colon. Schema: README, section "Beam problem files".
+// loads and supports, and no colon. Schema: model/README.md, section "Beam problem files".
 // Unknown keys, wrong types and unphysical values are rejected with the field's path.
 #include <nlohmann/json.hpp>
 #include <optional>

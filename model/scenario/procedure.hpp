@@ -1,6 +1,6 @@
 #pragma once
 // A procedure: what the physician's hand does at the handle over time, as a validated timeline
-// of actions (README "Scenario files"), and the player that turns it into one HandleCommand per
+// of actions (model/scenario/README.md), and the player that turns it into one HandleCommand per
 // world step. Independent of files and of the command line.
 //
 // Actions run in order and never overlap; a gap between two actions is a hold. Axially the hand

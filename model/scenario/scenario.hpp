@@ -1,5 +1,5 @@
 #pragma once
-// Scenario files (README "Scenario files"): what `scopekin simulate` runs. Two kinds, told apart
+// Scenario files (model/scenario/README.md): what `scopekin simulate` runs. Two kinds, told apart
 // by their top-level keys:
 //  * a world scenario ("colon"): a colon, a scope, solver settings, a procedure at the handle
 //    and the outputs wanted;

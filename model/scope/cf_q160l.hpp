@@ -1,6 +1,6 @@
 #pragma once
 // Olympus CF-Q160L adult colonoscope: the one documented place for its parameters
-// (thesis 4.2, App. B, F, H, I; PHYSICS.md Sec. 2). Units: mm, N, s, t.
+// (thesis 4.2, App. B, F, H, I; model/PHYSICS.md §2.5). Units: mm, N, s, t.
 //
 // Choices where the thesis is inconsistent:
 // * Radius 6.65 mm (App. F code); App. B's "diameter 13.6 mm" differs by 0.15 mm. Only the
@@ -11,7 +11,7 @@
 //   of a length of this scope; App. I's "0.4 kg for 300 mm" (0.0131 N/mm) comes with a 200 mm
 //   beam in the same code and is not self-consistent. The cantilever check (scopekin verify)
 //   fits EI / weight and reports what the measured shape supports.
-// * GJ = 7000 N mm^2 (Hellier et al., as quoted at thesis l. 1659).
+// * GJ = 7000 N mm^2 (Hellier et al. 2011, as quoted in thesis 4.2.2 and 5.3, Step 2).
 // * EA: App. F derives E = EI / I and uses E A; that gives EA = 3.17 kN (a 45 N push shortens
 //   the scope by 1.4 %). Kept as the thesis's choice.
 // * Transverse shear: not measured. The shear modulus is taken from the torsion test,

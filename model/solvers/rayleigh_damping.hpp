@@ -2,7 +2,7 @@
 #include <string>
 // Rayleigh damping C = a M + b K (thesis Eq. 4.7, values Eq. 4.15).
 //
-// Units trap (PHYSICS.md Sec. 2): the thesis's a = 0.3864, b = 0.0164 satisfy
+// Units trap (model/PHYSICS.md §2.4): the thesis's a = 0.3864, b = 0.0164 satisfy
 // 2 zeta f = a + b f^2 with f in Hz (check: 2*0.085*7 = 0.3864 + 0.0164*49), not the usual
 // 2 zeta w = a' + b' w^2 with w in rad/s. Converting: a' = 2 pi a [1/s], b' = b / (2 pi) [s].
 // The model stores a' and b' (SI-style, w in rad/s); C then has units N s/mm with M in t.

@@ -1,5 +1,5 @@
 // The cases of `scopekin verify`: each compares the model with an independent number
-// (measurement, published table or closed form). See README "Verification".
+// (measurement, published table or closed form). See model/README.md, "Verification".
 #include <array>
 #include <cmath>
 #include <limits>
@@ -29,7 +29,7 @@ BeamSection benchmark_section() {
                      .shear_stiffness_z_N = 1e8};
 }
 constexpr double kBenchmarkLength_mm = 1000.0;
-constexpr std::size_t kBenchmarkElements = 20;  // the issue allows at most 20
+constexpr std::size_t kBenchmarkElements = 20;  // the benchmark's mesh: at most 20 elements
 
 std::vector<VerificationRow> measured_cantilever_rows() {
   namespace mc = measured_cantilever;

@@ -1,5 +1,5 @@
 #pragma once
-// The world: the scope inside the colon, stepped in time (thesis 5.3, PHYSICS.md Sec. 5).
+// The world: the scope inside the colon, stepped in time (thesis 5.3, model/PHYSICS.md §5).
 // Every step of h:
 //   1. free motion: the scope's implicit Euler step (M/h^2 + C/h + K_T) d = r with the handle's
 //      prescribed motion, gravity and handle loads, no contact (linearised: one Newton

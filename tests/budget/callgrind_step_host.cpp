@@ -1,4 +1,4 @@
-// Host instruction count of kinetics::step under callgrind (issue 4 §5, item 7).
+// Host instruction count of kinetics::step under callgrind (reported, never asserted).
 //
 //   valgrind --tool=callgrind --collect-atstart=no '--toggle-collect=scopekin::kinetics::step(*'
 //            scopekin_budget_callgrind_step [--scenario NAME] [--max-steps N]

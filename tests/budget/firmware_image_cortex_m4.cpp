@@ -1,4 +1,4 @@
-// Minimal Cortex-M4 firmware image for the memory budget (issue 4 §5, item 4): the platform's
+// Minimal Cortex-M4 firmware image for the memory budget (flash, RAM, stack): the platform's
 // start-up code (vector table, reset handler, semihosting), kinetics::init and kinetics::step,
 // with State and Outputs in static storage as in the real firmware — and nothing else (no test
 // runner, no scenario data).  Its sections give flash (everything loaded from code memory:

@@ -1,4 +1,4 @@
-// Zero heap allocations after init (issue 4 §5; hard rule "no heap after start-up").
+// Zero heap allocations after init (the firmware's rule "no heap after start-up").
 //
 //   scopekin_budget_heap [--json FILE]
 //

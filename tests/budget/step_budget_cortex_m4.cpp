@@ -1,4 +1,4 @@
-// Instructions and stack per kinetics::step on the Cortex-M4 (issue 4 §5, items 3 and 4).
+// Instructions and stack per kinetics::step on the Cortex-M4, checked against their budgets.
 // Bare metal only: runs on QEMU `-M mps2-an386 -icount shift=0` through cmake/qemu-mps2-an386.sh,
 // with the portable_check runner (bare_metal_main.cpp).  tests/budget/tools/budget.py (m4-step)
 // runs it, collects the "@budget {...}" lines and writes the budget part.

@@ -1,4 +1,4 @@
-// Cross-target bit identity of kinetics::step (issue 4 §5).
+// Cross-target bit identity of kinetics::step: the same outputs, bit for bit, on every target.
 //
 // Every scenario of tests/firmware/data/scenarios/ runs through init + step; every field of every
 // Outputs is hashed (FNV-1a 64 over raw integer values, kinetics_harness.hpp) and compared with

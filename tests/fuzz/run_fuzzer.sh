@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # run_fuzzer.sh — runs one libFuzzer target for a bounded time on a fresh COPY of its seed corpus
 # (the source tree is never written), prints the executions, and appends "<name> <executions>"
-# to the executions file (summed by `fuzz.summary`, recorded in the README).
+# to the executions file (summed by `fuzz.summary`, recorded in hal/README.md).
 #
 # Usage: run_fuzzer.sh <name> <fuzzer> <work dir> <seconds> <executions file> <seed dir>...
 #        run_fuzzer.sh --summary <executions file>     (per target and total; fails if empty)

@@ -37,7 +37,7 @@ TEST(DefaultColon, HasHumanDimensions) {
     if (i != static_cast<std::size_t>(ColonRegion::transverse)) {
       EXPECT_LE(lengths[i], sigmoid);
     }
-  // Narrowest lumen 25 mm (PHYSICS.md Sec. 3) at the sigmoid-descending junction.
+  // Narrowest lumen 25 mm (model/PHYSICS.md §3.3) at the sigmoid-descending junction.
   const auto [radius, where] = colon.narrowest_radius_mm();
   EXPECT_DOUBLE_EQ(radius, 12.5);
   const double junction = lengths[0] + lengths[1];

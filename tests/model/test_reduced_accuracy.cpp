@@ -1,5 +1,5 @@
-// The firmware's reduced model against the full-order reference model (issue 4, section 4) and
-// the self-lock alarm against the reference's own self-lock onset (section 3), on the three
+// The firmware's reduced model against the full-order reference model (tip and station force
+// RMS) and the self-lock alarm against the reference's own self-lock onset, on the three
 // reference scenarios of model/scenarios/reference_*.json, and on one held-out procedure
 // (heldout_fast_advance.json) that is not a training run.
 //
@@ -13,8 +13,8 @@
 //   force     per active station, the Euclidean norm of the difference of the station force
 //             vectors (n, t, s) [N] — the full-order side is the resultant of its wall forces
 //             over the station's stretch (model::station_forces).
-// The figures go to reduced_accuracy_<scenario>.json in the build directory (README "Firmware
-// accuracy").
+// The figures go to reduced_accuracy_<scenario>.json in the build directory (firmware/README.md,
+// "Firmware accuracy").
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -179,18 +179,18 @@ class ReducedAccuracy : public ::testing::TestWithParam<const char*> {};
 TEST_P(ReducedAccuracy, AgainstTheReducedModelInDoubleAndTheFullOrderModel) {
   const ReferenceRun& r = run(GetParam());
   record(GetParam(), r);
-  // Section 4, second part: the firmware's Q16.16 against the same reduced model in double,
-  // RMS over the run (and the stations) as in the first part; the maxima are recorded (README).
+  // The firmware's Q16.16 against the same reduced model in double (bounds 0.05 mm / 0.01 N),
+  // RMS over the run (and the stations) as below; the maxima are recorded (firmware/README.md).
   EXPECT_LE(r.tip_fixed_vs_double.value(), 0.05) << "tip RMS [mm]";
   EXPECT_LE(r.force_fixed_vs_double.value(), 0.01) << "station force RMS [N]";
-  // Section 4, first part: against the full-order model.
+  // Against the full-order model (bounds 3 mm / 0.2 N).
   EXPECT_LE(r.tip_fixed_vs_full.value(), 3.0) << "tip RMS [mm] vs the full-order model";
   EXPECT_LE(r.force_fixed_vs_full.value(), 0.2) << "station force RMS [N] vs the full-order model";
 }
 
 // Generalisation: a procedure the tables were not trained on (25 mm/s instead of 20 mm/s). Not
-// one of section 4's scenarios; the bounds only keep the measured figures (README "Firmware
-// accuracy": tip RMS 2.6 mm, station force RMS 0.36 N) from getting worse.
+// held to the bounds above; these bounds only keep the measured figures (firmware/README.md,
+// "Firmware accuracy": tip RMS 2.6 mm, station force RMS 0.36 N) from getting worse.
 TEST(ReducedAccuracyHeldOut, FasterAdvanceThanTrained) {
   const ReferenceRun& r = run("heldout_fast_advance");
   record("heldout_fast_advance", r);

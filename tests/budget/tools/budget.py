@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Budget measurements of scopekin's firmware kinetics (issue 4 §5): run, check, report.
+"""Budget measurements of scopekin's firmware kinetics (instructions, RAM, flash, stack, heap
+after init): run, check, report.
 
 Subcommands (each is one CTest test of label `budget`, wired in tests/budget/CMakeLists.txt):
 

@@ -10,8 +10,8 @@
 //   scopekin_em_tracker_simulator -               stdout (e.g. | xxd)
 //
 // Options: --seed N (default 1), --events N (default 0 = forever), --clean (valid frames only),
-// --period-us N between events (default 6667: five sources at 30 Hz, the bench's rate, PHYSICS.md
-// §6).  A summary (events, valid frames, bytes) goes to stderr at the end.
+// --period-us N between events (default 6667: five sources at 30 Hz, the bench's rate,
+// model/PHYSICS.md §6).  A summary (events, valid frames, bytes) goes to stderr at the end.
 #include <fcntl.h>
 #include <stdlib.h>
 #include <unistd.h>

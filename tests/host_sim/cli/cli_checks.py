@@ -52,7 +52,7 @@ def check_demo():
     expect(s["status"] == "complete", "the demo's simulation completes")
     locks = [a for a in s["alarms"] if a["kind"] == "self_lock"]
     # The loop starts when the tip locks at the sigmoid-descending junction: 15.9 s in the reference
-    # run at 20 mm/s (README "Alarms"); the alarm must come within a second of it.
+    # run at 20 mm/s (firmware/README.md, "Alarms"); the alarm must come within a second of it.
     expect(locks and 15.5 < locks[0]["raised_s"] < 17.0, f"self-lock alarm raised near 15.9 s: {locks[:1]}")
     expect(0 < s["peak_handle_force_N"]["true"] < 100, "peak handle force positive and below 100 N")
     expect(abs(s["peak_handle_force_N"]["measured"] - s["peak_handle_force_N"]["true"]) < 1.0,
@@ -62,7 +62,7 @@ def check_demo():
     eff = s["advance_efficiency_by_region"]
     expect(0.9 < eff["rectum"]["efficiency"] <= 1.05, f"the tip follows the hand in the rectum: {eff.get('rectum')}")
     expect(eff["sigmoid"]["efficiency"] < 0.95, "the sigmoid loop costs advance")
-    # The colonoscopy ends in the cecum (it starts ~1530 mm along the default colon).
+    # The demo's colonoscopy ends in the cecum (it starts ~1530 mm along the default colon).
     expect(s["final_tip"]["region"] == "cecum", f"the tip reaches the cecum: {s['final_tip']}")
     expect(s["peak_handle_force_N"]["true"] < 43.0, "peak handle force below the 43 N peak push measured in patients (firmware/fixed_point/RANGES.md [A])")
     # Past the reduced model's depth range (760 mm) the box holds its estimate and says so.

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""The discrepancy workflow proven on data with a hidden effect (issue 7, README "Discrepancy
-workflow"). Each check writes a scenario, records it with `scopekin simulate` (the test bed's
+"""The discrepancy workflow proven on data with a hidden effect: each check must name the effect
+hidden in a synthetic recording, fit its parameters within 25 % and halve the most affected
+output's held-out error (host_sim/discrepancy/README.md). Each check writes a scenario, records it with `scopekin simulate` (the test bed's
 sensor noise, its own seed), and gives only the recording's CSV to `scopekin discrepancy` with the
 default model. Procedures, seeds and parameter values differ between checks.
 
@@ -250,7 +251,7 @@ def check_thesis_cantilever(_name):
     print(p.stdout)
     r = json.load(open(os.path.join(out, "report.json")))
     given = r["model_as_given"]["rms_mm"]
-    # The thesis's own models reach 5.5-6.1 mm RMS against these points (PHYSICS.md 2); the
+    # The thesis's own models reach 5.5-6.1 mm RMS against these points (model/PHYSICS.md §2.6); the
     # model at its chapter-5 EI with a horizontal clamp is worse, and every fit must do better.
     expect(8.0 < given < 12.0, f"model as given: RMS {given:.2f} mm (350 N cm^2, clamp horizontal)")
     names = sorted(c["name"] for c in r["candidates"])

@@ -36,7 +36,7 @@ TEST(SensorConfig, EmptyObjectGivesTheDocumentedDefaults) {
   EXPECT_EQ(c.em_tracker.position_noise_mm, 0.5);
   EXPECT_EQ(c.em_tracker.position_quantum_mm, 0.001);         // µm on the serial line
   EXPECT_NEAR(c.tip_force.sampling.rate_Hz, 30.303, 1e-3);
-  EXPECT_EQ(c.tip_force.force_noise_N, 0.075);                // thesis l. 1713, Table 5.1 text
+  EXPECT_EQ(c.tip_force.force_noise_N, 0.075);                // thesis §5.3, beside Fig. 5.21
   EXPECT_TRUE(c.tip_force.single_axis);
   EXPECT_EQ(scopekin::sensors::period_ticks(c.em_tracker.sampling.rate_Hz, "x"), 33);
 }
