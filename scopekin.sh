@@ -5,36 +5,48 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$ROOT"
 
-# Debian 12 packages the build, the cross toolchains and the emulators need.
-PACKAGES=(
+# Debian 12 packages.  The main job needs only the compiler, CMake and the host libraries of the
+# `scopekin` program, plus matplotlib for its plots; the tests need the rest (GoogleTest, Google
+# Benchmark, the cross toolchains, the emulators, clang for the fuzzers, the VM test's tools).
+MAIN_PACKAGES=(
   cmake ninja-build g++
-  libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
+  libeigen3-dev libcli11-dev nlohmann-json3-dev
+  python3 python3-matplotlib
+)
+TEST_PACKAGES=(
+  "${MAIN_PACKAGES[@]}"
   libgtest-dev libgmock-dev googletest libbenchmark-dev
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   qemu-user qemu-system-arm
-  python3 python3-canmatrix python3-matplotlib
+  python3-canmatrix
   clang-14 libclang-rt-14-dev
   qemu-system-x86 busybox-static can-utils cpio xz-utils
 )
 ALL_PRESETS=(host asan aarch64 cortex-m4 fuzz)
 BUILD_JOBS=2
+MAIN_START=$SECONDS
 
 usage() {
   cat <<USAGE
 Usage: ./scopekin.sh <command> [args]
 
 Commands:
-  main [args...]      Install missing Debian packages, configure and build the 'host' preset,
-                      then run the main job, a simulated colonoscopy through the firmware:
-                        build/host/host_sim/scopekin demo --out build/demo [args...]
-                      (args go to 'scopekin demo'; an --out of your own replaces build/demo)
-  test [preset...]    Install missing Debian packages, then for each preset (default: all of
-                      ${ALL_PRESETS[*]}) configure, build (-j${BUILD_JOBS}) and run ctest.
-                      Ends with one CTest-style line summed over all presets, e.g.
+  main [args...]      Install the missing Debian packages the main job needs, configure the 'app'
+                      preset (no tests) and build only the 'scopekin' program (and the reduced
+                      tables it is built with), then run the main job, a simulated colonoscopy
+                      through the firmware:
+                        build/app/host_sim/scopekin demo --out build/demo [args...]
+                      (args go to 'scopekin demo'; an --out of your own replaces build/demo).
+                      One progress line per stage: packages, configure, build, demo.
+  test [preset...]    Install the missing Debian packages the tests need, then for each preset
+                      (default: all of ${ALL_PRESETS[*]}) configure, build (-j${BUILD_JOBS}) and
+                      run ctest.  Ends with one CTest-style line summed over all presets, e.g.
                         100% tests passed, 0 tests failed out of N
                       A preset that fails to configure or build counts as one failed test.
                       Exit status is non-zero if anything failed.
+  test --quick        The edit-test loop: the 'host' preset, built, and its tests but the SocketCAN
+                      VM and the discrepancy checks (test preset 'host-quick'); same summary line.
   -h, --help, help    Show this help.
 
 Packages are checked with dpkg-query; only if some are missing does the script run
@@ -43,9 +55,10 @@ Logs of 'test' are kept in build/logs/<preset>.log.
 USAGE
 }
 
+# ensure_packages <package>...: installs those that are missing.
 ensure_packages() {
   local missing=() pkg
-  for pkg in "${PACKAGES[@]}"; do
+  for pkg in "$@"; do
     if [[ "$(dpkg-query -W -f='${db:Status-Status}' "$pkg" 2>/dev/null || true)" != "installed" ]]; then
       missing+=("$pkg")
     fi
@@ -63,11 +76,19 @@ ensure_packages() {
     apt-get install -y --no-install-recommends "${missing[@]}"
 }
 
+# stage <n> <of> <text>: one progress line, with the seconds since the command started.
+stage() {
+  echo "scopekin.sh main [$1/$2] $3 (at $((SECONDS - MAIN_START)) s)"
+}
+
 cmd_main() {
-  ensure_packages
-  cmake --preset host
-  cmake --build --preset host
-  local cli=build/host/host_sim/scopekin
+  stage 1 4 "packages: ${MAIN_PACKAGES[*]}"
+  ensure_packages "${MAIN_PACKAGES[@]}"
+  stage 2 4 "configure: cmake --preset app"
+  cmake --preset app --log-level=WARNING
+  stage 3 4 "build: cmake --build --preset app (the scopekin program and what it needs)"
+  cmake --build --preset app -j "$BUILD_JOBS"
+  local cli=build/app/host_sim/scopekin
   if [[ ! -x "$cli" ]]; then
     echo "scopekin.sh: $cli was not built" >&2
     exit 1
@@ -78,10 +99,19 @@ cmd_main() {
       out=()
     fi
   done
+  stage 4 4 "demo: $cli demo ${out[*]} $*"
   exec "$cli" demo "${out[@]}" "$@"
 }
 
 cmd_test() {
+  if [[ "${1:-}" == --quick ]]; then
+    if [[ $# -ne 1 ]]; then
+      echo "scopekin.sh: test --quick takes no presets (it is the host preset's quick tests)" >&2
+      exit 2
+    fi
+    run_presets quick
+    return
+  fi
   local presets=("$@")
   if [[ ${#presets[@]} -eq 0 ]]; then
     presets=("${ALL_PRESETS[@]}")
@@ -96,24 +126,36 @@ cmd_test() {
     fi
   done
 
-  ensure_packages
+  run_presets "${presets[@]}"
+}
+
+# run_presets <preset>...: configure, build and test each; "quick" is the host preset with the
+# host-quick test preset.  Prints the summary; fails if anything failed.
+run_presets() {
+  ensure_packages "${TEST_PACKAGES[@]}"
   mkdir -p build/logs
 
-  local total=0 failed=0 broken=() report=() start seconds log line t f
-  for p in "${presets[@]}"; do
+  local total=0 failed=0 broken=() report=() start seconds log line t f p configure test_preset
+  for p in "$@"; do
+    configure=$p
+    test_preset=$p
+    if [[ $p == quick ]]; then
+      configure=host
+      test_preset=host-quick
+    fi
     echo "==================== preset: $p ===================="
     start=$SECONDS
     log="build/logs/$p.log"
-    if ! cmake --preset "$p"; then
+    if ! cmake --preset "$configure"; then
       broken+=("$p (configure)"); failed=$((failed + 1)); total=$((total + 1))
       report+=("$p: configure FAILED"); continue
     fi
-    if ! cmake --build --preset "$p" -j "$BUILD_JOBS"; then
+    if ! cmake --build --preset "$configure" -j "$BUILD_JOBS"; then
       broken+=("$p (build)"); failed=$((failed + 1)); total=$((total + 1))
       report+=("$p: build FAILED"); continue
     fi
     set +e
-    ctest --preset "$p" 2>&1 | tee "$log"
+    ctest --preset "$test_preset" 2>&1 | tee "$log"
     local rc=${PIPESTATUS[0]}
     set -e
     seconds=$((SECONDS - start))

@@ -18,7 +18,7 @@ namespace scopekin::messages {
 
 using fixed_point::Q16_16;
 
-/// Tracker sensors, by wire id (the thesis bench's S1..S4, model/PHYSICS.md).
+/// Tracker sensors, by wire id (the thesis bench's S1..S4, model/PHYSICS.md §6).
 enum class EmSensor : std::uint8_t {
     tip = 0,        ///< S1, at the tip
     twenty_cm = 1,  ///< S2, 20 cm from the tip
