@@ -20,7 +20,7 @@ TEST_PACKAGES=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   qemu-user qemu-system-arm
   python3-canmatrix
-  clang-14 libclang-rt-14-dev
+  clang-14 libclang-rt-14-dev clang-format-14
   qemu-system-x86 busybox-static can-utils cpio xz-utils
 )
 ALL_PRESETS=(host asan aarch64 cortex-m4 fuzz)
