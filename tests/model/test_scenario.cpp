@@ -461,9 +461,9 @@ TEST(Simulation, SamplesAtTheOutputRateAndFollowsTheProcedure) {
   doc["outputs"] = {{"sample_rate_Hz", 30}, {"nodes_from_tip_mm", {0, 100}}};
   const Scenario s = read_scenario(doc, "s.json");
   auto world = build_world(s);
-  std::vector<SimulationSample> samples;
+  std::vector<WorldRow> samples;
   SimulationCallbacks callbacks;
-  callbacks.on_sample = [&](const SimulationSample& x, const World&) { samples.push_back(x); };
+  callbacks.on_sample = [&](const WorldRow& x, const World&) { samples.push_back(x); };
   std::size_t progress_calls = 0;
   callbacks.on_progress = [&](const SimulationProgress&) { ++progress_calls; };
   const SimulationSummary sum = run_simulation(*world, s, callbacks);
