@@ -55,7 +55,8 @@ double world_origin_s(const MeasuredRecording& data, double h_s);
 /// Runs the model with `extra_effects` (truth_effects entries) under the recording. `progress`
 /// (may be empty) gets the fraction done now and then. `windows` (may be null): the world's state
 /// at each window's start is saved into `window_states`. Throws model::ModelError for a bad
-/// effect; a run that fails part-way returns ok = false.
+/// effect; a run that fails part-way (a failed or unphysical step, judged as for any scenario by
+/// model::run_simulation) returns ok = false.
 ModelPrediction predict(const ModelSpec& model, const nlohmann::json& extra_effects, const MeasuredRecording& data,
                         const std::function<void(double)>& progress = {},
                         const std::vector<RunWindow>* windows = nullptr,

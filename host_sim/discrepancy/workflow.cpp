@@ -1,6 +1,7 @@
 #include "host_sim/discrepancy/workflow.hpp"
 
 #include <chrono>
+#include <optional>
 #include <utility>
 
 #include "host_sim/discrepancy/report.hpp"
