@@ -128,7 +128,7 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
     } else {
       options.model = discrepancy::default_model();
     }
-    const discrepancy::BenchData data = discrepancy::extract_bench_data(rec, o.recording);
+    const discrepancy::MeasuredRecording data = discrepancy::extract_measured_recording(rec, o.recording);
     const fs::path dir(o.out);
     prepare_directory(dir, {"report.json", "report.md", "model.json", "series.csv", "outputs.png", "residuals.png", "candidates.png"});
     ProgressBar bar(o.quiet);

@@ -7,7 +7,7 @@
 
 namespace scopekin::discrepancy {
 
-int block_of(const BenchData& data, double t) {
+int block_of(const MeasuredRecording& data, double t) {
   if (!(data.duration_s > 0.0)) return 0;
   const double x = (t - data.start_s) / data.duration_s * kBlocks;
   return std::clamp(static_cast<int>(std::floor(x)), 0, kBlocks - 1);
@@ -15,7 +15,7 @@ int block_of(const BenchData& data, double t) {
 
 bool is_held_out_block(int block) { return block % 3 == 1; }
 
-bool in_set(const BenchData& data, double t, SampleSet set) {
+bool in_set(const MeasuredRecording& data, double t, SampleSet set) {
   if (set == SampleSet::all) return true;
   if (set == SampleSet::fit_training || set == SampleSet::fit_held_out) {
     if (!data.fit_spans_s.empty() &&
@@ -27,7 +27,7 @@ bool in_set(const BenchData& data, double t, SampleSet set) {
   return is_held_out_block(block_of(data, t)) == (set == SampleSet::held_out);
 }
 
-std::size_t samples_in_set(const BenchData& data, const MeasuredSeries& series, SampleSet set) {
+std::size_t samples_in_set(const MeasuredRecording& data, const MeasuredSeries& series, SampleSet set) {
   std::size_t n = 0;
   for (double t : series.time_s) n += in_set(data, t, set) ? 1U : 0U;
   return n;
@@ -44,7 +44,7 @@ double median(std::vector<double> v) {
 
 }  // namespace
 
-std::vector<double> estimate_noise(const BenchData& data) {
+std::vector<double> estimate_noise(const MeasuredRecording& data) {
   std::vector<double> sigma;
   for (const MeasuredSeries& s : data.outputs) {
     // The tip force sensor reads compression only: where it reads 0 the noise is clipped away,
@@ -70,7 +70,7 @@ std::vector<double> estimate_noise(const BenchData& data) {
 
 bool assessable(const std::vector<double>& sigma, std::size_t output) { return sigma[output] > 0.0; }
 
-double rms_error(const BenchData& data, const ModelPrediction& p, std::size_t o, SampleSet set) {
+double rms_error(const MeasuredRecording& data, const ModelPrediction& p, std::size_t o, SampleSet set) {
   const MeasuredSeries& m = data.outputs[o];
   double sum = 0.0;
   std::size_t n = 0;
@@ -82,7 +82,7 @@ double rms_error(const BenchData& data, const ModelPrediction& p, std::size_t o,
   return n == 0 ? 0.0 : std::sqrt(sum / static_cast<double>(n));
 }
 
-Eigen::VectorXd normalised_residuals(const BenchData& data, const ModelPrediction& p, const std::vector<double>& sigma,
+Eigen::VectorXd normalised_residuals(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
                                      SampleSet set) {
   std::vector<double> r;
   for (std::size_t o = 0; o < data.outputs.size(); ++o) {
@@ -99,7 +99,7 @@ Eigen::VectorXd normalised_residuals(const BenchData& data, const ModelPredictio
   return Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
 }
 
-std::string phase_at(const BenchData& data, double t) {
+std::string phase_at(const MeasuredRecording& data, double t) {
   const double dt = 0.1;
   const double speed = (data.insertion_at(t + dt) - data.insertion_at(t - dt)) / (2.0 * dt);
   const double roll_rate = (data.roll_at(t + dt) - data.roll_at(t - dt)) / (2.0 * dt);
@@ -109,7 +109,7 @@ std::string phase_at(const BenchData& data, double t) {
   return "hold";
 }
 
-nlohmann::ordered_json locate(const BenchData& data, const ModelPrediction& p, const std::vector<double>& sigma,
+nlohmann::ordered_json locate(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
                               double threshold) {
   using Json = nlohmann::ordered_json;
   auto speed_band = [&](double t) {

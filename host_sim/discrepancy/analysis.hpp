@@ -16,47 +16,47 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
-#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_run.hpp"
 
 namespace scopekin::discrepancy {
 
 inline constexpr int kBlocks = 10;
 /// The block (0 .. kBlocks - 1) a recording time falls in.
-int block_of(const BenchData& data, double time_s);
+int block_of(const MeasuredRecording& data, double time_s);
 bool is_held_out_block(int block);
 
 /// fit_training and fit_held_out: the training / held-out samples within the fits' scored spans
-/// (BenchData::fit_spans_s; all of them when it is empty).
+/// (MeasuredRecording::fit_spans_s; all of them when it is empty).
 enum class SampleSet { training, held_out, all, fit_training, fit_held_out };
-bool in_set(const BenchData& data, double time_s, SampleSet set);
+bool in_set(const MeasuredRecording& data, double time_s, SampleSet set);
 /// How many of an output's samples fall in a set.
-std::size_t samples_in_set(const BenchData& data, const MeasuredSeries& series, SampleSet set);
+std::size_t samples_in_set(const MeasuredRecording& data, const MeasuredSeries& series, SampleSet set);
 
 /// Second differences needed per component for a noise estimate.
 inline constexpr std::size_t kMinNoiseSamples = 20;
-/// Noise SD per output (BenchData::outputs order), combined over components [output unit]; 0
+/// Noise SD per output (MeasuredRecording::outputs order), combined over components [output unit]; 0
 /// where it cannot be estimated (a tip force sensor that reads 0 nearly all the time): such an
 /// output is not assessed (not in the costs, never significant), only reported.
-std::vector<double> estimate_noise(const BenchData& data);
+std::vector<double> estimate_noise(const MeasuredRecording& data);
 bool assessable(const std::vector<double>& sigma, std::size_t output);
 
 /// RMS of |measured - predicted| over a sample set [output unit]; 0 for an empty set.
-double rms_error(const BenchData& data, const ModelPrediction& p, std::size_t output, SampleSet set);
+double rms_error(const MeasuredRecording& data, const ModelPrediction& p, std::size_t output, SampleSet set);
 
 /// The fitting residual: for every output o and sample i of the set, the components of
 /// (measured - predicted) / (sigma_o sqrt(n_o)). Its squared norm is the sum over outputs of
 /// the mean squared error in units of the noise: about 1 per output for a perfect model.
-Eigen::VectorXd normalised_residuals(const BenchData& data, const ModelPrediction& p, const std::vector<double>& sigma,
+Eigen::VectorXd normalised_residuals(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
                                      SampleSet set);
 
 /// What the hand does at t: "push", "pull", "hold" or "twist" (from the encoder's rates over 0.2 s).
-std::string phase_at(const BenchData& data, double time_s);
+std::string phase_at(const MeasuredRecording& data, double time_s);
 
 /// Where the disagreement is: for each grouping (region, phase, speed, depth), each group's
 /// sample count and, per output, RMS error and its ratio to the noise, with `significant` set
 /// where the ratio exceeds `threshold` on at least 10 samples.
-nlohmann::ordered_json locate(const BenchData& data, const ModelPrediction& p, const std::vector<double>& sigma,
+nlohmann::ordered_json locate(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
                               double threshold);
 
 }  // namespace scopekin::discrepancy

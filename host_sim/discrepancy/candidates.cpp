@@ -18,13 +18,13 @@ std::function<nlohmann::json(const std::vector<double>&, const nlohmann::json&)>
   };
 }
 
-std::function<nlohmann::json(const BenchData&, const ModelPrediction&)> constant(nlohmann::json held) {
-  return [held](const BenchData&, const ModelPrediction&) { return held; };
+std::function<nlohmann::json(const MeasuredRecording&, const ModelPrediction&)> constant(nlohmann::json held) {
+  return [held](const MeasuredRecording&, const ModelPrediction&) { return held; };
 }
 
 }  // namespace
 
-PeriodicResidual strongest_periodic_residual(const BenchData& data, const ModelPrediction& baseline,
+PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data, const ModelPrediction& baseline,
                                              const std::vector<double>& sigma) {
   PeriodicResidual best;
   double best_power = -1.0;
@@ -86,7 +86,7 @@ const std::vector<Candidate>& candidate_library() {
                   {"amplitude_sin_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002},
                   {"direction_polar_rad", "rad", 0.0, M_PI, M_PI / 2.0, 0.05},
                   {"direction_azimuth_rad", "rad", -M_PI, M_PI, M_PI / 2.0, 0.05}},
-                 [](const BenchData& data, const ModelPrediction& baseline) {
+                 [](const MeasuredRecording& data, const ModelPrediction& baseline) {
                    const PeriodicResidual p = strongest_periodic_residual(data, baseline, estimate_noise(data));
                    return nlohmann::json{{"frequency_Hz", p.frequency_Hz}};
                  },

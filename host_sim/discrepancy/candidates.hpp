@@ -18,7 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_run.hpp"
 
 namespace scopekin::discrepancy {
@@ -36,7 +36,7 @@ struct Candidate {
   std::string acts;     ///< where it acts, for the report
   std::vector<FittedParameter> parameters;
   /// Held parameters, read off the baseline residual where needed (sigmoid_mobility).
-  std::function<nlohmann::json(const BenchData&, const ModelPrediction& baseline)> held;
+  std::function<nlohmann::json(const MeasuredRecording&, const ModelPrediction& baseline)> held;
   /// The truth_effects entry for fitted values and the held parameters.
   std::function<nlohmann::json(const std::vector<double>& values, const nlohmann::json& held)> entry;
 };
@@ -51,7 +51,7 @@ struct PeriodicResidual {
   double frequency_Hz = 0.25;
   Eigen::Vector3d direction = Eigen::Vector3d::UnitY();
 };
-PeriodicResidual strongest_periodic_residual(const BenchData& data, const ModelPrediction& baseline,
+PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data, const ModelPrediction& baseline,
                                              const std::vector<double>& sigma);
 
 }  // namespace scopekin::discrepancy

@@ -7,7 +7,7 @@
 
 namespace scopekin::discrepancy {
 
-double hand_motion_mm(const BenchData& data, double from_s, double to_s) {
+double hand_motion_mm(const MeasuredRecording& data, double from_s, double to_s) {
   // Sampled every 50 ms: the encoder's own rate may be 1 kHz, and hand motion is smooth.
   const double dt = 0.05;
   double motion = 0.0;
@@ -23,7 +23,7 @@ double hand_motion_mm(const BenchData& data, double from_s, double to_s) {
   return motion;
 }
 
-std::vector<RunWindow> choose_fit_windows(const BenchData& data, double budget_s) {
+std::vector<RunWindow> choose_fit_windows(const MeasuredRecording& data, double budget_s) {
   const double block = data.duration_s / kBlocks;
   const double length = budget_s / kBlocks;
   if (!(length < block)) return {};

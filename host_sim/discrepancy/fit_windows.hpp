@@ -14,7 +14,7 @@
 // A recording whose blocks are no longer than a window is fitted on full runs (no windows).
 #include <vector>
 
-#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 
 namespace scopekin::discrepancy {
 
@@ -38,10 +38,10 @@ inline constexpr double kRollMotion_mm_per_rad = 20.0;
 
 /// One window per block (block order), or none when the blocks fit the budget whole.
 /// `budget_s` must be positive (the workflow takes at least kMinFitBudget_s).
-std::vector<RunWindow> choose_fit_windows(const BenchData& data, double budget_s);
+std::vector<RunWindow> choose_fit_windows(const MeasuredRecording& data, double budget_s);
 
 /// The hand's motion over [from_s, to_s]: |insertion| travelled plus kRollMotion_mm_per_rad x
 /// |roll| turned [mm].
-double hand_motion_mm(const BenchData& data, double from_s, double to_s);
+double hand_motion_mm(const MeasuredRecording& data, double from_s, double to_s);
 
 }  // namespace scopekin::discrepancy

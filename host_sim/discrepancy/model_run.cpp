@@ -10,33 +10,10 @@
 
 namespace scopekin::discrepancy {
 
-nlohmann::json default_model() {
-  return nlohmann::json::parse(R"({
-    "description": "The default model: CF-Q160L in the bundled default colon, as the firmware's reduced model was built from it",
-    "colon": {"bundled": "default"},
-    "scope": {"model": "cf_q160l", "length_mm": 1700, "elements": 170},
-    "gravity_mm_per_s2": [0, 0, -9810],
-    "solver": {"time_step_s": 0.01}
-  })");
-}
-
 std::string ModelPrediction::region_at(double t) const {
   if (step_region.empty()) return "";
   const double x = std::round((t - t0_s) / h_s);
   return step_region[static_cast<std::size_t>(std::clamp(x, 0.0, static_cast<double>(step_region.size() - 1)))];
-}
-
-nlohmann::json scenario_for_run(const nlohmann::json& model, const nlohmann::json& extra_effects, const BenchData& data) {
-  nlohmann::json doc = model;
-  nlohmann::json effects = doc.contains("truth_effects") ? doc["truth_effects"] : nlohmann::json::array();
-  for (const auto& e : extra_effects) effects.push_back(e);
-  if (effects.empty())
-    doc.erase("truth_effects");
-  else
-    doc["truth_effects"] = effects;
-  doc["initial_insertion_mm"] = data.initial_insertion_mm;
-  doc["procedure"] = nlohmann::json::array({{{"action", "hold"}, {"start_s", 0.0}, {"end_s", data.duration_s + 1.0}}});
-  return doc;
 }
 
 namespace {
@@ -58,48 +35,53 @@ Eigen::Vector3d output_of(const host_sim::WorldReadout& r, OutputId id) {
   return Eigen::Vector3d::Zero();
 }
 
-/// Largest penetration and contact force a step may report before the run counts as unphysical
-/// (as model/scenario/simulation.cpp).
-constexpr double kMaxPenetration_mm = 1.0;
-
 }  // namespace
 
-namespace {
+double world_origin_s(const MeasuredRecording& data, double h) { return std::floor(data.start_s / h + 1e-9) * h; }
 
-/// World time 0 is the last multiple of h at or before the first encoder sample (a recording
-/// from `scopekin simulate` starts at 0, as its world did).
-double world_origin_s(const BenchData& data, double h) { return std::floor(data.start_s / h + 1e-9) * h; }
+model::HandleCommand RecordingDrive::command_for_step(std::size_t step, double /*t_s*/, double h_s,
+                                                      double /*depth_now_mm*/, double /*roll_now_rad*/) {
+  // From the step's index, not the world's clock: a restored window continues on the same grid.
+  const double t = t0_s_ + static_cast<double>(step) * h_s;
+  model::HandleCommand command;
+  command.insertion_mm = data_.insertion_at(t);
+  command.roll_rad = data_.roll_at(t);
+  return command;
+}
+
+namespace {
 
 /// The step at or before recording time t.
 std::size_t step_at(double t, double t0, double h) {
   return static_cast<std::size_t>(std::max(0.0, std::floor((t - t0) / h + 1e-9)));
 }
 
-/// Steps the world from its step `from` to `to` under the recording's hand motion, reading it
-/// after each step into readouts[k - first]. Returns "" or why the run stopped.
-std::string run_steps(model::World& world, host_sim::WorldReader& reader, const BenchData& data, double t0, std::size_t from,
-                      std::size_t to, std::size_t first, std::vector<host_sim::WorldReadout>& readouts,
-                      const std::function<void(std::size_t)>& after_step) {
+/// Steps the world from its step `from` to `to` under the recording's hand motion
+/// (model::run_simulation), reading it after each step into readouts[k - from]. Returns "" or
+/// why the run stopped.
+std::string run_steps(model::World& world, const model::Scenario& scenario, host_sim::WorldReader& reader,
+                      const MeasuredRecording& data, double t0, std::size_t from, std::size_t to,
+                      std::vector<host_sim::WorldReadout>& readouts, const std::function<void(std::size_t)>& after_step) {
   const double h = world.time_step_s();
-  for (std::size_t k = from + 1; k <= to; ++k) {
-    const double t = t0 + static_cast<double>(k) * h;
-    model::HandleCommand command;
-    command.insertion_mm = data.insertion_at(t);
-    command.roll_rad = data.roll_at(t);
-    const model::WorldStepReport report = world.step(command);
-    if (!report.ok || report.max_penetration_mm > kMaxPenetration_mm)
-      return "t = " + std::to_string(t) + " s: " +
-             (report.ok ? "the scope penetrates the colon wall by " + std::to_string(report.max_penetration_mm) + " mm"
-                        : report.failure);
-    readouts[k - first] = reader.read(world);
+  RecordingDrive drive(data, t0);
+  std::size_t k = from;
+  model::SimulationCallbacks callbacks;
+  callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
+    ++k;
+    readouts[k - from] = reader.read(w);
     if (after_step) after_step(k);
-  }
-  return "";
+  };
+  const model::SimulationSummary summary =
+      model::run_simulation(world, scenario, drive, {from, to, static_cast<double>(to) * h}, callbacks);
+  if (summary.complete) return "";
+  // The loop's times are world times.
+  return t0 == 0.0 ? summary.message
+                   : summary.message + " (world time; the recording's is " + std::to_string(t0) + " s later)";
 }
 
 /// The outputs at the measured samples with time in [from_s, to_s], interpolated between the
 /// readouts of steps first .. first + readouts.size() - 1.
-void fill_outputs(const BenchData& data, const std::vector<host_sim::WorldReadout>& readouts, double t0, double h,
+void fill_outputs(const MeasuredRecording& data, const std::vector<host_sim::WorldReadout>& readouts, double t0, double h,
                   std::size_t first, double from_s, double to_s, ModelPrediction& out) {
   const std::size_t last = first + readouts.size() - 1;
   for (std::size_t o = 0; o < data.outputs.size(); ++o) {
@@ -117,7 +99,7 @@ void fill_outputs(const BenchData& data, const std::vector<host_sim::WorldReadou
   }
 }
 
-void size_outputs(const BenchData& data, ModelPrediction& out) {
+void size_outputs(const MeasuredRecording& data, ModelPrediction& out) {
   out.outputs.resize(data.outputs.size());
   for (std::size_t o = 0; o < data.outputs.size(); ++o)
     out.outputs[o].assign(data.outputs[o].time_s.size(),
@@ -126,10 +108,10 @@ void size_outputs(const BenchData& data, ModelPrediction& out) {
 
 }  // namespace
 
-ModelPrediction predict(const nlohmann::json& model, const std::string& model_source, const nlohmann::json& extra_effects,
-                        const BenchData& data, const std::function<void(double)>& progress,
-                        const std::vector<RunWindow>* windows, std::vector<model::World::State>* window_states) {
-  const model::Scenario scenario = model::read_scenario(scenario_for_run(model, extra_effects, data), model_source);
+ModelPrediction predict(const ModelSpec& model, const nlohmann::json& extra_effects, const MeasuredRecording& data,
+                        const std::function<void(double)>& progress, const std::vector<RunWindow>* windows,
+                        std::vector<model::World::State>* window_states) {
+  const model::Scenario scenario = scenario_for_run(model, extra_effects, data.initial_insertion_mm);
   std::unique_ptr<model::World> world = model::build_world(scenario);
   host_sim::WorldReader reader(*world);
   const double h = world->time_step_s();
@@ -146,7 +128,7 @@ ModelPrediction predict(const nlohmann::json& model, const std::string& model_so
   std::vector<host_sim::WorldReadout> readouts(steps + 1);
   readouts[0] = reader.read(*world);
   ModelPrediction out;
-  out.failure = run_steps(*world, reader, data, t0, 0, steps, 0, readouts, [&](std::size_t k) {
+  out.failure = run_steps(*world, scenario, reader, data, t0, 0, steps, readouts, [&](std::size_t k) {
     for (std::size_t w = 0; w < save_steps.size(); ++w)
       if (save_steps[w] == k) (*window_states)[w] = world->state();
     if (progress && k % 200 == 0) progress(static_cast<double>(k) / static_cast<double>(steps));
@@ -164,11 +146,10 @@ ModelPrediction predict(const nlohmann::json& model, const std::string& model_so
   return out;
 }
 
-ModelPrediction predict_windows(const nlohmann::json& model, const std::string& model_source,
-                                const nlohmann::json& extra_effects, const BenchData& data,
-                                const std::vector<RunWindow>& windows, const std::vector<model::World::State>& states,
-                                const std::vector<std::size_t>& which) {
-  const model::Scenario scenario = model::read_scenario(scenario_for_run(model, extra_effects, data), model_source);
+ModelPrediction predict_windows(const ModelSpec& model, const nlohmann::json& extra_effects,
+                                const MeasuredRecording& data, const std::vector<RunWindow>& windows,
+                                const std::vector<model::World::State>& states, const std::vector<std::size_t>& which) {
+  const model::Scenario scenario = scenario_for_run(model, extra_effects, data.initial_insertion_mm);
   std::unique_ptr<model::World> world = model::build_world(scenario);
   const double h = world->time_step_s();
   const double t0 = world_origin_s(data, h);
@@ -184,7 +165,7 @@ ModelPrediction predict_windows(const nlohmann::json& model, const std::string& 
     host_sim::WorldReader reader(*world);
     std::vector<host_sim::WorldReadout> readouts(to - from + 1);
     readouts[0] = reader.read(*world);
-    out.failure = run_steps(*world, reader, data, t0, from, to, from, readouts, {});
+    out.failure = run_steps(*world, scenario, reader, data, t0, from, to, readouts, {});
     if (!out.failure.empty()) return out;
     out.steps += to - from;
     fill_outputs(data, readouts, t0, h, from, window.score_from_s, window.end_s, out);

@@ -146,6 +146,58 @@ std::vector<double> fit(const Spec& spec, std::size_t excluded, int& solves) {
   return nelder_mead(cost, x0, dx);
 }
 
+/// A candidate fitted to all nine points, and scored leaving each point out in turn.
+CantileverCandidate fit_candidate(const Spec& spec) {
+  const double w = model::cf_q160l::kWeightPerLength_N_per_mm;
+  CantileverCandidate c;
+  c.name = spec.name;
+  c.parameters = spec.parameters;
+  int n = 0;
+  const std::vector<double> x = fit(spec, 0, n);
+  const Parameters p = to_parameters(spec, x);
+  const std::array<double, 10> e = point_errors(p, n);
+  double sum = 0.0;
+  for (std::size_t i = 1; i < 10; ++i) sum += e[i];
+  c.rms_all_mm = std::sqrt(sum / 9.0);
+  c.values.push_back(p.ei_clamp_over_w * w);
+  if (spec.profile) c.values.push_back(p.ei_tip_over_w * w);
+  if (spec.pitch) c.values.push_back(p.pitch_deg);
+  // BIC on the 18 coordinates, k fitted parameters.
+  c.bic = 18.0 * std::log(sum / 18.0) + static_cast<double>(x.size()) * std::log(18.0);
+  double held = 0.0;
+  for (std::size_t i = 1; i < 10; ++i) {
+    const std::vector<double> xi = fit(spec, i, n);
+    held += point_errors(to_parameters(spec, xi), n)[i];
+  }
+  c.rms_held_out_mm = std::sqrt(held / 9.0);
+  c.solves = n;
+  return c;
+}
+
+/// report.md: the model as given and the candidates' table.
+std::string report_markdown(const CantileverReport& report, bool profile_better) {
+  std::string md;
+  char line[512];
+  md = "# Discrepancy report: the thesis's measured cantilever (Table 4.2)\n\n";
+  std::snprintf(line, sizeof line, "Model as given (EI 350 N cm^2, clamp horizontal): RMS %.2f mm over points 2-10.\n\n",
+                report.rms_as_given_mm);
+  md += line;
+  md += "| candidate | fitted | RMS, all points | RMS, held out (leave one out) | BIC |\n|---|---|---|---|---|\n";
+  for (const CantileverCandidate& c : report.candidates) {
+    std::string values;
+    for (std::size_t k = 0; k < c.parameters.size(); ++k) {
+      std::snprintf(line, sizeof line, "%s%s %.4g", values.empty() ? "" : ", ", c.parameters[k].c_str(), c.values[k]);
+      values += line;
+    }
+    std::snprintf(line, sizeof line, "| %s | %s | %.2f mm | %.2f mm | %.1f |\n", c.name.c_str(), values.c_str(), c.rms_all_mm,
+                  c.rms_held_out_mm, c.bic);
+    md += line;
+  }
+  md += std::string("\nEI along the scope ") + (profile_better ? "explains the gap better than one EI" : "does not explain the gap better than one EI") +
+        " (held-out RMS and BIC). EI and weight appear only as EI / w.\n";
+  return md;
+}
+
 }  // namespace
 
 CantileverReport run_thesis_cantilever() {
@@ -161,35 +213,11 @@ CantileverReport run_thesis_cantilever() {
                                 {"ei_profile", {"EI_clamp_N_mm2", "EI_tip_N_mm2"}, true, false},
                                 {"ei_scale + clamp_pitch", {"EI_N_mm2", "clamp_pitch_deg"}, false, true},
                                 {"ei_profile + clamp_pitch", {"EI_clamp_N_mm2", "EI_tip_N_mm2", "clamp_pitch_deg"}, true, true}};
-  for (const Spec& spec : specs) {
-    CantileverCandidate c;
-    c.name = spec.name;
-    c.parameters = spec.parameters;
-    int n = 0;
-    const std::vector<double> x = fit(spec, 0, n);
-    const Parameters p = to_parameters(spec, x);
-    const std::array<double, 10> e = point_errors(p, n);
-    double sum = 0.0;
-    for (std::size_t i = 1; i < 10; ++i) sum += e[i];
-    c.rms_all_mm = std::sqrt(sum / 9.0);
-    c.values.push_back(p.ei_clamp_over_w * w);
-    if (spec.profile) c.values.push_back(p.ei_tip_over_w * w);
-    if (spec.pitch) c.values.push_back(p.pitch_deg);
-    // BIC on the 18 coordinates, k fitted parameters.
-    c.bic = 18.0 * std::log(sum / 18.0) + static_cast<double>(x.size()) * std::log(18.0);
-    double held = 0.0;
-    for (std::size_t i = 1; i < 10; ++i) {
-      const std::vector<double> xi = fit(spec, i, n);
-      held += point_errors(to_parameters(spec, xi), n)[i];
-    }
-    c.rms_held_out_mm = std::sqrt(held / 9.0);
-    c.solves = n;
-    report.candidates.push_back(c);
-  }
+  for (const Spec& spec : specs) report.candidates.push_back(fit_candidate(spec));
   std::sort(report.candidates.begin(), report.candidates.end(),
             [](const CantileverCandidate& a, const CantileverCandidate& b) { return a.rms_held_out_mm < b.rms_held_out_mm; });
 
-  // The question the issue asks: EI along the scope, or one EI?
+  // The question: EI along the scope, or one EI?
   const auto find = [&](const std::string& name) {
     return *std::find_if(report.candidates.begin(), report.candidates.end(),
                          [&](const CantileverCandidate& c) { return c.name == name; });
@@ -214,25 +242,7 @@ CantileverReport run_thesis_cantilever() {
                           "(" + std::to_string(w) + " N/mm); a 10 % heavier scope means 10 % more EI for the same shape";
   j["best"] = report.candidates.front().name;
 
-  std::string& md = report.markdown;
-  char line[512];
-  md = "# Discrepancy report: the thesis's measured cantilever (Table 4.2)\n\n";
-  std::snprintf(line, sizeof line, "Model as given (EI 350 N cm^2, clamp horizontal): RMS %.2f mm over points 2-10.\n\n",
-                report.rms_as_given_mm);
-  md += line;
-  md += "| candidate | fitted | RMS, all points | RMS, held out (leave one out) | BIC |\n|---|---|---|---|---|\n";
-  for (const CantileverCandidate& c : report.candidates) {
-    std::string values;
-    for (std::size_t k = 0; k < c.parameters.size(); ++k) {
-      std::snprintf(line, sizeof line, "%s%s %.4g", values.empty() ? "" : ", ", c.parameters[k].c_str(), c.values[k]);
-      values += line;
-    }
-    std::snprintf(line, sizeof line, "| %s | %s | %.2f mm | %.2f mm | %.1f |\n", c.name.c_str(), values.c_str(), c.rms_all_mm,
-                  c.rms_held_out_mm, c.bic);
-    md += line;
-  }
-  md += std::string("\nEI along the scope ") + (profile_better ? "explains the gap better than one EI" : "does not explain the gap better than one EI") +
-        " (held-out RMS and BIC). EI and weight appear only as EI / w.\n";
+  report.markdown = report_markdown(report, profile_better);
   return report;
 }
 

@@ -16,29 +16,17 @@
 // A recording longer than the fit budget is fitted on windows (fit_windows.hpp): the candidates'
 // costs are then on the windows, and the named effects are run over the whole recording, where
 // they must explain min_share again (else the verdict is unexplained).
-#include <functional>
-#include <string>
+// The steps are functions of their own (stages.hpp), called in order by run_discrepancy; they
+// share one context (context.hpp), and report.hpp builds report.json.
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/context.hpp"
 #include "host_sim/discrepancy/fit.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 
 namespace scopekin::discrepancy {
-
-struct WorkflowOptions {
-  nlohmann::json model;                 ///< the current model (default_model() if not given)
-  std::string model_source = "default model";
-  unsigned threads = 2;
-  double significance = 2.0;            ///< held-out RMS error / noise above which an output disagrees
-  double min_share = 0.75;              ///< of the excess error a named effect must explain
-  /// Recording seconds a fit's run simulates at most (fit_windows.hpp); longer recordings are
-  /// fitted on windows.
-  double fit_budget_s = kDefaultFitBudget_s;
-  /// Stage text and overall fraction done, now and then.
-  std::function<void(const std::string&, double)> progress;
-};
 
 struct WorkflowResult {
   nlohmann::ordered_json report;        ///< report.json
@@ -50,6 +38,6 @@ struct WorkflowResult {
 
 /// Throws model::ModelError for a model that cannot be built; a model that cannot follow the
 /// recording (the run fails) throws DiscrepancyInputError saying where.
-WorkflowResult run_discrepancy(const BenchData& recording, const WorkflowOptions& options);
+WorkflowResult run_discrepancy(const MeasuredRecording& recording, const WorkflowOptions& options);
 
 }  // namespace scopekin::discrepancy

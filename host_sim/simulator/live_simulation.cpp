@@ -159,7 +159,7 @@ LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteC
       ++next_action;
     }
   };
-  callbacks.on_sample = [&](const model::SimulationSample& s, const model::World& w) {
+  callbacks.on_sample = [&](const model::WorldRow& s, const model::World& w) {
     if (streams.world != nullptr) write_world_csv_row(*streams.world, s, latest);
     if (streams.contacts != nullptr) write_contacts_csv_rows(*streams.contacts, s.time_s, w);
   };

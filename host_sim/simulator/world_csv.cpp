@@ -29,7 +29,7 @@ std::string world_csv_header(const model::Scenario& sc, const std::vector<std::s
   return h;
 }
 
-void write_world_csv_row(std::ostream& out, const model::SimulationSample& s, const WorldReadout& r) {
+void write_world_csv_row(std::ostream& out, const model::WorldRow& s, const WorldReadout& r) {
   out << num(s.time_s) << ',' << num(s.handle_force_N) << ',' << num(s.handle_torque_Nmm) << ','
       << num(s.insertion_depth_mm) << ',' << num(s.roll_deg) << ',' << num(s.tip_mm.x()) << ',' << num(s.tip_mm.y()) << ','
       << num(s.tip_mm.z());

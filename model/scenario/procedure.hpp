@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "model/scenario/hand_command_source.hpp"
 #include "model/world/world.hpp"
 
 namespace scopekin::model {
@@ -57,8 +58,9 @@ class Procedure {
 };
 
 /// Plays a procedure step by step. The world steps from t to t + h; `command` returns what the
-/// hand does at t + h given the world's state at t.
-class ProcedurePlayer {
+/// hand does at t + h given the world's state at t. As a HandCommandSource it ignores the step's
+/// index: the procedure's timeline is in world time.
+class ProcedurePlayer final : public HandCommandSource {
  public:
   ProcedurePlayer(const Procedure& procedure, double initial_insertion_mm, double scope_length_mm,
                   double initial_roll_rad = 0.0);
@@ -68,11 +70,15 @@ class ProcedurePlayer {
   /// used only where position control resumes after a push or twist. A prescribed depth outside
   /// [0, scope length) (possible only after a push) is clamped and a warning recorded.
   HandleCommand command(double t_s, double h_s, double depth_now_mm, double roll_now_rad);
+  HandleCommand command_for_step(std::size_t /*step*/, double t_s, double h_s, double depth_now_mm,
+                                 double roll_now_rad) override {
+    return command(t_s, h_s, depth_now_mm, roll_now_rad);
+  }
 
   double end_s() const { return end_s_; }
   /// Index into Procedure::actions() of the action playing at the last command, or -1 in a gap.
   int current_action() const;
-  const std::vector<std::string>& warnings() const { return warnings_; }
+  std::vector<std::string> warnings() const override { return warnings_; }
 
  private:
   struct Segment {

@@ -259,7 +259,38 @@ std::size_t scope_node_from_tip(double arc_from_tip_mm, double scope_length_mm, 
   return elements - k;
 }
 
-Scenario read_scenario(const nlohmann::json& document, const std::string& source) {
+namespace {
+
+/// "procedure": the actions, each at least one time step long, dithers slow enough for the step.
+void read_procedure(const JsonObject& root, Scenario& sc) {
+  const nlohmann::json& steps = root.array("procedure");
+  const std::string procedure_path = root.field("procedure");
+  std::vector<ProcedureAction> actions;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const JsonObject a(steps[i], item(procedure_path, i));
+    actions.push_back(read_action(a));
+    const ProcedureAction& act = actions.back();
+    const double h = sc.settings.time_step_s;
+    if (std::isfinite(act.end_s - act.start_s) && act.end_s > act.start_s && act.end_s - act.start_s < h * (1.0 - 1e-9))
+      throw ModelError(a.path() + ": lasts " + number_text(act.end_s - act.start_s) +
+                       " s, shorter than one time step (solver.time_step_s = " + number_text(h) + " s)");
+    if (act.kind == ActionKind::dither && act.frequency_Hz > 0.25 / h * (1.0 + 1e-9))
+      throw ModelError(a.field("frequency_Hz") + ": " + number_text(act.frequency_Hz) +
+                       " Hz is too fast for solver.time_step_s = " + number_text(h) +
+                       " s (at least 4 steps per period: <= " + number_text(0.25 / h) + " Hz)");
+  }
+  sc.procedure = Procedure(std::move(actions), procedure_path);
+  sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
+}
+
+std::shared_ptr<const WorldEffect> make_tip_steering(const Scenario& sc) {
+  const double element_mm = sc.scope.length_mm / static_cast<double>(sc.scope.elements);
+  return std::make_shared<TipSteering>(sc.steering, *sc.colon, sc.scope.section.bending_stiffness_z_Nmm2, element_mm);
+}
+
+/// A scenario document; `with_run`: also its run (procedure, initial insertion), which a world
+/// model leaves to whoever runs it (read_world_model).
+Scenario read_document(const nlohmann::json& document, const std::string& source, bool with_run) {
   const JsonObject root(document, source + ":");
   Scenario sc;
   sc.source = source;
@@ -313,10 +344,7 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
   }
 
   sc.settings.gravity_mm_per_s2 = root.vector3_or("gravity_mm_per_s2", sc.settings.gravity_mm_per_s2);
-  sc.settings.initial_insertion_mm = non_negative_or(root, "initial_insertion_mm", 0.0);
-  if (sc.settings.initial_insertion_mm >= sc.scope.length_mm)
-    throw ModelError(root.field("initial_insertion_mm") + ": " + number_text(sc.settings.initial_insertion_mm) +
-                     " mm must be shorter than the scope (" + number_text(sc.scope.length_mm) + " mm)");
+  if (with_run) set_initial_insertion(sc, non_negative_or(root, "initial_insertion_mm", 0.0));
   if (root.has("solver")) read_solver(root.object("solver"), sc.settings);
   try {
     sc.settings.validate();  // backstop: every field above is already checked with its path
@@ -324,24 +352,7 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
     throw ModelError(source + ": " + e.what());
   }
 
-  const nlohmann::json& steps = root.array("procedure");
-  const std::string procedure_path = root.field("procedure");
-  std::vector<ProcedureAction> actions;
-  for (std::size_t i = 0; i < steps.size(); ++i) {
-    const JsonObject a(steps[i], item(procedure_path, i));
-    actions.push_back(read_action(a));
-    const ProcedureAction& act = actions.back();
-    const double h = sc.settings.time_step_s;
-    if (std::isfinite(act.end_s - act.start_s) && act.end_s > act.start_s && act.end_s - act.start_s < h * (1.0 - 1e-9))
-      throw ModelError(a.path() + ": lasts " + number_text(act.end_s - act.start_s) +
-                       " s, shorter than one time step (solver.time_step_s = " + number_text(h) + " s)");
-    if (act.kind == ActionKind::dither && act.frequency_Hz > 0.25 / h * (1.0 + 1e-9))
-      throw ModelError(a.field("frequency_Hz") + ": " + number_text(act.frequency_Hz) +
-                       " Hz is too fast for solver.time_step_s = " + number_text(h) +
-                       " s (at least 4 steps per period: <= " + number_text(0.25 / h) + " Hz)");
-  }
-  sc.procedure = Procedure(std::move(actions), procedure_path);
-  sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
+  if (with_run) read_procedure(root, sc);
 
   if (root.has("truth_effects")) sc.effects = read_world_effects(root.array("truth_effects"), root.field("truth_effects"));
   if (root.has("sensors")) {
@@ -363,9 +374,7 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
       if (window.gain > 1.0) throw ModelError(w.field("gain") + ": " + number_text(window.gain) + " must be in (0, 1]");
       sc.steering.push_back(window);
     }
-    const double element_mm = sc.scope.length_mm / static_cast<double>(sc.scope.elements);
-    sc.effects.push_back(std::make_shared<TipSteering>(sc.steering, *sc.colon,
-                                                       sc.scope.section.bending_stiffness_z_Nmm2, element_mm));
+    sc.effects.push_back(make_tip_steering(sc));
   }
   if (root.has("abdominal_pressure")) {
     const nlohmann::json& windows = root.array("abdominal_pressure");
@@ -399,6 +408,36 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
   }
   if (root.has("outputs")) sc.outputs = read_outputs(root.object("outputs"), sc.scope.length_mm, sc.scope.elements, sc.settings.time_step_s);
   return sc;
+}
+
+}  // namespace
+
+Scenario read_scenario(const nlohmann::json& document, const std::string& source) {
+  return read_document(document, source, true);
+}
+
+Scenario read_world_model(const nlohmann::json& document, const std::string& source) {
+  Scenario sc = read_document(document, source, false);
+  if (sc.kind != ScenarioKind::world) throw ModelError(source + ": not a world scenario (no colon)");
+  // Read (and so checked) with the rest; each run makes its own (scene_effects).
+  sc.effects.clear();
+  return sc;
+}
+
+void set_initial_insertion(Scenario& sc, double initial_insertion_mm) {
+  const std::string field = sc.source + ": initial_insertion_mm";
+  require_non_negative(initial_insertion_mm, field);
+  if (initial_insertion_mm >= sc.scope.length_mm)
+    throw ModelError(field + ": " + number_text(initial_insertion_mm) + " mm must be shorter than the scope (" +
+                     number_text(sc.scope.length_mm) + " mm)");
+  sc.settings.initial_insertion_mm = initial_insertion_mm;
+}
+
+std::vector<std::shared_ptr<const WorldEffect>> scene_effects(const Scenario& sc) {
+  std::vector<std::shared_ptr<const WorldEffect>> effects;
+  if (!sc.steering.empty()) effects.push_back(make_tip_steering(sc));
+  if (!sc.abdominal_pressure.empty()) effects.push_back(std::make_shared<AbdominalPressure>(sc.abdominal_pressure));
+  return effects;
 }
 
 nlohmann::json with_model_file(nlohmann::json document, const std::string& filename) {

@@ -64,6 +64,18 @@ struct Scenario {
 
 /// Reads and validates a scenario document; `source` names it in messages.
 Scenario read_scenario(const nlohmann::json& document, const std::string& source);
+/// Reads a world model: a world scenario's document without its run. "procedure" and
+/// "initial_insertion_mm" are not read (whoever runs the model gives them: `scopekin discrepancy`
+/// drives it with a recording); every other key is read and checked as read_scenario does.
+/// Scenario::effects is left empty: a run makes its own instances (read_world_effects of the
+/// truth_effects entries, then scene_effects), as an effect may keep state over a run.
+Scenario read_world_model(const nlohmann::json& document, const std::string& source);
+/// Where the scope starts: "initial_insertion_mm" given by the runner (ModelError, naming the
+/// field under the scenario's source, if negative or not shorter than the scope).
+void set_initial_insertion(Scenario& scenario, double initial_insertion_mm);
+/// New instances of the effects the scenario's "steering" and "abdominal_pressure" windows add
+/// (in that order, after the truth effects); none for an empty list, which acts on nothing.
+std::vector<std::shared_ptr<const WorldEffect>> scene_effects(const Scenario& scenario);
 /// Reads a scenario file. A key "model": "FILE" (relative to the scenario file; e.g. the model.json
 /// of `scopekin discrepancy`) takes every key from that model file that the scenario does not
 /// give itself; truth_effects are joined (the model's first).

@@ -34,9 +34,9 @@ std::vector<std::size_t> output_nodes(const Scenario& scenario) {
   return nodes;
 }
 
-SimulationSample sample_world(const World& world, const WorldStepReport* last_step,
-                              const std::vector<std::size_t>& output_nodes) {
-  SimulationSample s;
+WorldRow sample_world(const World& world, const WorldStepReport* last_step,
+                      const std::vector<std::size_t>& output_nodes) {
+  WorldRow s;
   s.time_s = world.time_s();
   s.handle_force_N = world.handle_force_N();
   s.handle_torque_Nmm = world.handle_torque_Nmm();
@@ -65,17 +65,24 @@ SimulationSample sample_world(const World& world, const WorldStepReport* last_st
 }
 
 SimulationSummary run_simulation(World& world, const Scenario& scenario, const SimulationCallbacks& callbacks) {
+  const double h = world.time_step_s();
+  const double end = scenario.procedure.end_s();
+  const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
+  ProcedurePlayer player(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(), world.roll_rad());
+  return run_simulation(world, scenario, player, {0, step_count, end}, callbacks);
+}
+
+SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCommandSource& hand,
+                                 const SimulationSpan& span, const SimulationCallbacks& callbacks) {
   using Clock = std::chrono::steady_clock;
   const auto wall_start = Clock::now();
   SimulationSummary sum;
   const double h = world.time_step_s();
-  const double end = scenario.procedure.end_s();
+  const double end = span.end_s;
   sum.end_time_s = end;
-  const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
   const double rate = scenario.outputs.sample_rate_Hz;
   const double eps = 1e-6 * h;
   const std::vector<std::size_t> nodes = output_nodes(scenario);
-  ProcedurePlayer player(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(), world.roll_rad());
 
   std::size_t next_sample = 0;  // index k of the next sample time k / rate
   auto maybe_sample = [&](const WorldStepReport* last) {
@@ -88,8 +95,9 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, const S
 
   std::size_t sweeps_total = 0;
   sum.complete = true;
-  for (std::size_t n = 0; n < step_count; ++n) {
-    const HandleCommand command = player.command(world.time_s(), h, world.insertion_depth_mm(), world.roll_rad());
+  for (std::size_t step = span.first_step + 1; step <= span.last_step; ++step) {
+    const HandleCommand command =
+        hand.command_for_step(step, world.time_s(), h, world.insertion_depth_mm(), world.roll_rad());
     const WorldStepReport report = world.step(command);
     if (!report.ok) {
       std::ostringstream m;
@@ -158,7 +166,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, const S
   sum.final_tip_mm = world.node_position_mm(world.scope_node_count() - 1);
   sum.final_insertion_depth_mm = world.insertion_depth_mm();
   sum.final_roll_deg = world.roll_rad() * kDegPerRad;
-  sum.warnings = player.warnings();
+  sum.warnings = hand.warnings();
   return sum;
 }
 

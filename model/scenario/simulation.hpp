@@ -1,7 +1,8 @@
 #pragma once
 // Running a world scenario: builds the World, plays the procedure step by step until its end,
 // samples the state at the output rate and sums up the run. Independent of the command line:
-// samples and progress go to callbacks.
+// samples and progress go to callbacks. The stepping loop is the same whoever commands the
+// hand (hand_command_source.hpp): the procedure, or a recording's encoder.
 #include <Eigen/Dense>
 #include <array>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "model/scenario/hand_command_source.hpp"
 #include "model/scenario/scenario.hpp"
 #include "model/world/world.hpp"
 
@@ -18,8 +20,8 @@ namespace scopekin::model {
 inline constexpr double kMaxPhysicalContactForce_N = 1000.0;
 inline constexpr double kMaxPhysicalPenetration_mm = 1.0;
 
-/// One row of the recording: the state after a step (or the initial state).
-struct SimulationSample {
+/// One row of world.csv: the world's true state after a step (or the initial state).
+struct WorldRow {
   double time_s = 0;
   double handle_force_N = 0;
   double handle_torque_Nmm = 0;
@@ -74,7 +76,7 @@ struct SimulationSummary {
 
 struct SimulationCallbacks {
   /// Called at t = 0 and at the first step at or after each sample time k / sample_rate_Hz.
-  std::function<void(const SimulationSample&, const World&)> on_sample;
+  std::function<void(const WorldRow&, const World&)> on_sample;
   /// Called after every step.
   std::function<void(const SimulationProgress&)> on_progress;
   /// Called after every successful step with the world (before on_sample / on_progress); the
@@ -86,13 +88,25 @@ struct SimulationCallbacks {
 /// world cannot be built (e.g. the initial insertion crosses the wall).
 std::unique_ptr<World> build_world(const Scenario& scenario);
 
-/// The recording row of the world's current state; `last_step` is the step that led there
+/// The world.csv row of the world's current state; `last_step` is the step that led there
 /// (nullptr at t = 0). `output_nodes`: scope node indices of the extra node columns.
-SimulationSample sample_world(const World& world, const WorldStepReport* last_step,
+WorldRow sample_world(const World& world, const WorldStepReport* last_step,
                               const std::vector<std::size_t>& output_nodes);
 
 /// Scope node indices of Scenario::outputs.nodes_from_tip_mm.
 std::vector<std::size_t> output_nodes(const Scenario& scenario);
+
+/// The steps a run takes: from the world's step now to `last_step`.
+struct SimulationSpan {
+  std::size_t first_step = 0;  ///< the world's step now: 0 fresh from build_world, else a restored state's
+  std::size_t last_step = 0;
+  double end_s = 0;            ///< world time at last_step (SimulationSummary::end_time_s, progress)
+};
+
+/// The stepping loop: steps `world` through `span` with the commands of `hand`, until the end or
+/// the first failed or unphysical step. `scenario` gives the samples' rate and node columns.
+SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCommandSource& hand,
+                                 const SimulationSpan& span, const SimulationCallbacks& callbacks);
 
 /// Plays the scenario's procedure on `world` (fresh from build_world) until its end or the first
 /// failed or unphysical step.

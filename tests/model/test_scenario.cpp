@@ -324,6 +324,35 @@ ProcedureAction act(ActionKind kind, double start, double end) {
   return a;
 }
 
+// A world model (scopekin discrepancy's --model): the run's keys are not read, the effects are
+// checked but left to each run, and the runner's initial insertion is checked as the file's.
+TEST(ScenarioReader, WorldModelLeavesTheRunAndTheEffectsToTheRunner) {
+  nlohmann::json doc = base();
+  doc.erase("initial_insertion_mm");
+  doc["procedure"] = "not read";
+  doc["truth_effects"] = nlohmann::json::parse(R"([{"name": "ei_scale", "factor": 0.9}])");
+  doc["abdominal_pressure"] = nlohmann::json::parse(R"([{"start_s": 0, "end_s": 1}])");
+  Scenario m = read_world_model(doc, "m.json");
+  EXPECT_TRUE(m.procedure.actions().empty());
+  EXPECT_TRUE(m.effects.empty());
+  const auto scene = scene_effects(m);
+  ASSERT_EQ(scene.size(), 1u);
+  EXPECT_EQ(scene[0]->name(), "abdominal_pressure");
+  set_initial_insertion(m, 25.0);
+  EXPECT_EQ(m.settings.initial_insertion_mm, 25.0);
+  try {
+    set_initial_insertion(m, 300.0);
+    ADD_FAILURE() << "no error for an insertion of the scope's whole length";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.json: initial_insertion_mm: 300 mm must be shorter than the scope"),
+              std::string::npos)
+        << e.what();
+  }
+  doc["truth_effects"] = nlohmann::json::parse(R"([{"name": "no_such_effect"}])");
+  EXPECT_THROW(read_world_model(doc, "m.json"), ModelError);
+  EXPECT_THROW(read_world_model(nlohmann::json::parse(R"({"beam": {}})"), "b.json"), ModelError);
+}
+
 TEST(ScenarioReader, ModelFileFillsInAndJoinsTruthEffects) {
   // A model file (as scopekin discrepancy writes) next to a scenario that names it.
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "scopekin_test_model_file";
@@ -461,9 +490,9 @@ TEST(Simulation, SamplesAtTheOutputRateAndFollowsTheProcedure) {
   doc["outputs"] = {{"sample_rate_Hz", 30}, {"nodes_from_tip_mm", {0, 100}}};
   const Scenario s = read_scenario(doc, "s.json");
   auto world = build_world(s);
-  std::vector<SimulationSample> samples;
+  std::vector<WorldRow> samples;
   SimulationCallbacks callbacks;
-  callbacks.on_sample = [&](const SimulationSample& x, const World&) { samples.push_back(x); };
+  callbacks.on_sample = [&](const WorldRow& x, const World&) { samples.push_back(x); };
   std::size_t progress_calls = 0;
   callbacks.on_progress = [&](const SimulationProgress&) { ++progress_calls; };
   const SimulationSummary sum = run_simulation(*world, s, callbacks);

@@ -1,16 +1,24 @@
 // The discrepancy workflow's data handling (host_sim/discrepancy/): what it takes from a
 // recording and refuses, the noise estimate, the blocked hold-out and the phases. Expected
-// numbers are independent of the code: a known noise SD, hand-made recordings.
+// numbers are independent of the code: a known noise SD, hand-made recordings. And its model
+// runs: windows restarted from saved states, and a recording's drive stepped by the same loop
+// as a procedure.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "host_sim/discrepancy/analysis.hpp"
-#include "host_sim/discrepancy/bench_data.hpp"
 #include "host_sim/discrepancy/fit_windows.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_run.hpp"
+#include "host_sim/discrepancy/model_spec.hpp"
+#include "model/scenario/procedure.hpp"
+#include "model/scenario/simulation.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -40,15 +48,15 @@ recording::Recording make_recording(double seconds, double em_sd_mm, unsigned se
 
 std::string refusal(const recording::Recording& rec) {
   try {
-    (void)extract_bench_data(rec, "r.csv");
+    (void)extract_measured_recording(rec, "r.csv");
   } catch (const DiscrepancyInputError& e) {
     return e.what();
   }
   return "";
 }
 
-TEST(DiscrepancyBenchData, TakesTheDriveAndTheOutputsItHas) {
-  const BenchData d = extract_bench_data(make_recording(20.0, 0.5), "r.csv");
+TEST(DiscrepancyMeasuredRecording, TakesTheDriveAndTheOutputsItHas) {
+  const MeasuredRecording d = extract_measured_recording(make_recording(20.0, 0.5), "r.csv");
   EXPECT_EQ(d.drive.size(), 20000u);
   EXPECT_DOUBLE_EQ(d.start_s, 0.001);
   EXPECT_DOUBLE_EQ(d.initial_insertion_mm, 20.02);
@@ -62,7 +70,7 @@ TEST(DiscrepancyBenchData, TakesTheDriveAndTheOutputsItHas) {
   EXPECT_EQ(d.outputs[1].time_s.size(), 607u);
 }
 
-TEST(DiscrepancyBenchData, RefusesWhatCannotDriveOrBeCompared) {
+TEST(DiscrepancyMeasuredRecording, RefusesWhatCannotDriveOrBeCompared) {
   recording::Recording no_encoder = make_recording(20.0, 0.5);
   for (auto& row : no_encoder.rows) row.insertion_roll.reset();
   EXPECT_NE(refusal(no_encoder).find("no handle motion"), std::string::npos) << refusal(no_encoder);
@@ -88,7 +96,7 @@ TEST(DiscrepancyBenchData, RefusesWhatCannotDriveOrBeCompared) {
 
 TEST(DiscrepancyAnalysis, NoiseEstimateRecoversAKnownSd) {
   // Three axes of N(0, 0.5 mm) on a straight line: the combined SD is 0.5 sqrt(3) = 0.866 mm.
-  const BenchData d = extract_bench_data(make_recording(60.0, 0.5, 7), "r.csv");
+  const MeasuredRecording d = extract_measured_recording(make_recording(60.0, 0.5, 7), "r.csv");
   const std::vector<double> sigma = estimate_noise(d);
   EXPECT_NEAR(sigma[0], 0.5 * std::sqrt(3.0), 0.05 * 0.866);
   // A constant handle force has no noise to estimate: not assessed.
@@ -97,7 +105,7 @@ TEST(DiscrepancyAnalysis, NoiseEstimateRecoversAKnownSd) {
 }
 
 TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
-  const BenchData d = extract_bench_data(make_recording(20.0, 0.5), "r.csv");
+  const MeasuredRecording d = extract_measured_recording(make_recording(20.0, 0.5), "r.csv");
   // 20 s in 10 blocks of ~2 s; blocks 1, 4 and 7 are held out.
   EXPECT_EQ(block_of(d, 0.5), 0);
   EXPECT_EQ(block_of(d, 3.0), 1);
@@ -124,7 +132,7 @@ TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
 // blocks fit the budget whole. A hand-made drive: 100 s holding at 50 mm except, 5 s into each
 // 10 s block, 20 mm in at 10 mm/s and out again (5..9 s).
 TEST(DiscrepancyFitWindows, OneWindowPerBlockAroundTheHandsMotion) {
-  BenchData d;
+  MeasuredRecording d;
   for (int k = 0; k <= 10000; ++k) {
     const double t = 0.01 * k;
     const double in_block = std::fmod(t, 10.0);
@@ -164,14 +172,14 @@ TEST(DiscrepancyFitWindows, OneWindowPerBlockAroundTheHandsMotion) {
 // same numbers: its outputs are the full run's, bit for bit (the fits' finite differences rely on
 // it), and they are NaN outside the scored spans.
 TEST(DiscrepancyFitWindows, WindowedRunOfTheModelAsGivenRepeatsTheFullRun) {
-  const BenchData d = extract_bench_data(make_recording(14.0, 0.5), "r.csv");
+  const MeasuredRecording d = extract_measured_recording(make_recording(14.0, 0.5), "r.csv");
   const std::vector<RunWindow> windows = choose_fit_windows(d, 12.0);
   ASSERT_EQ(windows.size(), 10u);
   std::vector<model::World::State> states;
-  const ModelPrediction full = predict(default_model(), "default", nlohmann::json::array(), d, {}, &windows, &states);
+  const ModelSpec model = read_model_spec(default_model(), "default");
+  const ModelPrediction full = predict(model, nlohmann::json::array(), d, {}, &windows, &states);
   ASSERT_TRUE(full.ok) << full.failure;
-  const ModelPrediction part =
-      predict_windows(default_model(), "default", nlohmann::json::array(), d, windows, states, {2, 5, 9});
+  const ModelPrediction part = predict_windows(model, nlohmann::json::array(), d, windows, states, {2, 5, 9});
   ASSERT_TRUE(part.ok) << part.failure;
   std::size_t compared = 0, outside = 0;
   for (std::size_t o = 0; o < d.outputs.size(); ++o)
@@ -189,6 +197,76 @@ TEST(DiscrepancyFitWindows, WindowedRunOfTheModelAsGivenRepeatsTheFullRun) {
     }
   EXPECT_GT(compared, 50u);
   EXPECT_GT(outside, compared);
+}
+
+/// Plays a procedure and keeps the commands it gave.
+class LoggedPlayer final : public model::HandCommandSource {
+ public:
+  explicit LoggedPlayer(model::ProcedurePlayer player) : player_(std::move(player)) {}
+  model::HandleCommand command_for_step(std::size_t step, double t_s, double h_s, double depth_now_mm,
+                                        double roll_now_rad) override {
+    log.push_back(player_.command_for_step(step, t_s, h_s, depth_now_mm, roll_now_rad));
+    return log.back();
+  }
+  std::vector<model::HandleCommand> log;
+
+ private:
+  model::ProcedurePlayer player_;
+};
+
+// One stepping loop for procedures and recordings (model::run_simulation): the commands a
+// procedure gave, replayed as a recording's encoder (RecordingDrive), step the world to the same
+// world.csv rows, bit for bit.
+TEST(DiscrepancyRecordingDrive, ReplaysAProcedureToTheSameWorldRows) {
+  nlohmann::json doc = default_model();
+  doc["initial_insertion_mm"] = 20.0;
+  doc["outputs"] = {{"sample_rate_Hz", 100}, {"nodes_from_tip_mm", {200}}};
+  doc["procedure"] = nlohmann::json::parse(R"([
+    {"action": "advance", "start_s": 0, "end_s": 1.0, "speed_mm_per_s": 25},
+    {"action": "rotate", "start_s": 1.0, "end_s": 1.5, "speed_deg_per_s": 60},
+    {"action": "withdraw", "start_s": 1.5, "end_s": 2.0, "speed_mm_per_s": 10}])");
+  const model::Scenario scenario = model::read_scenario(doc, "p.json");
+  auto run = [&](model::HandCommandSource& hand, std::vector<model::WorldRow>& rows) {
+    std::unique_ptr<model::World> world = model::build_world(scenario);
+    const auto steps = static_cast<std::size_t>(std::ceil(scenario.procedure.end_s() / world->time_step_s() - 1e-9));
+    model::SimulationCallbacks callbacks;
+    callbacks.on_sample = [&](const model::WorldRow& row, const model::World&) { rows.push_back(row); };
+    return model::run_simulation(*world, scenario, hand, {0, steps, scenario.procedure.end_s()}, callbacks);
+  };
+  LoggedPlayer player(model::ProcedurePlayer(scenario.procedure, 20.0, scenario.scope.length_mm));
+  std::vector<model::WorldRow> played;
+  const model::SimulationSummary by_procedure = run(player, played);
+  ASSERT_TRUE(by_procedure.complete) << by_procedure.message;
+  ASSERT_EQ(player.log.size(), 200u);
+
+  // The recording: the encoder read the commanded depth and roll at every step's end.
+  MeasuredRecording recording;
+  recording.drive.push_back({0.0, 20.0, 0.0});
+  for (std::size_t k = 0; k < player.log.size(); ++k)
+    recording.drive.push_back({static_cast<double>(k + 1) * scenario.settings.time_step_s, player.log[k].insertion_mm,
+                               player.log[k].roll_rad});
+  recording.end_s = recording.drive.back().time_s;
+  recording.duration_s = recording.end_s;
+  recording.initial_insertion_mm = 20.0;
+  RecordingDrive drive(recording, world_origin_s(recording, scenario.settings.time_step_s));
+  std::vector<model::WorldRow> replayed;
+  const model::SimulationSummary by_recording = run(drive, replayed);
+  ASSERT_TRUE(by_recording.complete) << by_recording.message;
+
+  ASSERT_EQ(replayed.size(), played.size());
+  EXPECT_EQ(played.size(), 201u);
+  for (std::size_t i = 0; i < played.size(); ++i) {
+    EXPECT_EQ(replayed[i].time_s, played[i].time_s) << i;
+    EXPECT_EQ(replayed[i].insertion_depth_mm, played[i].insertion_depth_mm) << i;
+    EXPECT_EQ(replayed[i].roll_deg, played[i].roll_deg) << i;
+    EXPECT_EQ(replayed[i].handle_force_N, played[i].handle_force_N) << i;
+    EXPECT_EQ(replayed[i].handle_torque_Nmm, played[i].handle_torque_Nmm) << i;
+    EXPECT_EQ(replayed[i].tip_mm, played[i].tip_mm) << i;
+    EXPECT_EQ(replayed[i].nodes_mm, played[i].nodes_mm) << i;
+    EXPECT_EQ(replayed[i].contact_count, played[i].contact_count) << i;
+  }
+  EXPECT_NEAR(played.back().insertion_depth_mm, 20.0 + 25.0 - 5.0, 1e-9);
+  EXPECT_NEAR(played.back().roll_deg, 30.0, 1e-6);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-#include "host_sim/discrepancy/bench_data.hpp"
+#include "host_sim/discrepancy/measured_recording.hpp"
 
 #include <algorithm>
 #include <array>
@@ -46,25 +46,25 @@ const char* output_unit(OutputId id) {
   return units[static_cast<std::size_t>(id)];
 }
 
-std::string BenchData::region_at(double t) const {
+std::string MeasuredRecording::region_at(double t) const {
   if (region_time_s.empty()) return "";
   auto it = std::upper_bound(region_time_s.begin(), region_time_s.end(), t);
   if (it == region_time_s.begin()) return region.front();
   return region[static_cast<std::size_t>(it - region_time_s.begin()) - 1];
 }
 
-double BenchData::insertion_at(double t) const {
+double MeasuredRecording::insertion_at(double t) const {
   return interpolate(drive, t, [](const DriveSample& s) { return s.insertion_mm; });
 }
 
-double BenchData::roll_at(double t) const {
+double MeasuredRecording::roll_at(double t) const {
   return interpolate(drive, t, [](const DriveSample& s) { return s.roll_rad; });
 }
 
-BenchData extract_bench_data(const recording::Recording& rec, const std::string& source) {
-  BenchData data;
-  data.source = source;
-  const std::string where = source + ": ";
+namespace {
+
+/// The drive: every encoder sample, checked for units and length.
+void extract_drive(const recording::Recording& rec, const std::string& where, MeasuredRecording& data) {
   std::int64_t t0_us = -1;
   double roll0 = 0.0;
   for (const recording::RecordingRow& row : rec.rows) {
@@ -104,7 +104,11 @@ BenchData extract_bench_data(const recording::Recording& rec, const std::string&
   if (data.duration_s < kMinDuration_s)
     throw DiscrepancyInputError(where + "the handle motion lasts " + number(data.duration_s) + " s: too short to hold "
                                 "data out; needs at least " + number(kMinDuration_s) + " s");
+}
 
+/// The measured outputs within the drive's span (handle signals thinned), and the region labels.
+std::array<MeasuredSeries, kOutputCount> extract_outputs(const recording::Recording& rec, const std::string& where,
+                                                         MeasuredRecording& data) {
   std::array<MeasuredSeries, kOutputCount> series;
   for (std::size_t k = 0; k < kOutputCount; ++k) {
     series[k].id = static_cast<OutputId>(k);
@@ -154,6 +158,17 @@ BenchData extract_bench_data(const recording::Recording& rec, const std::string&
       last_region = row.region;
     }
   }
+  return series;
+}
+
+}  // namespace
+
+MeasuredRecording extract_measured_recording(const recording::Recording& rec, const std::string& source) {
+  MeasuredRecording data;
+  data.source = source;
+  const std::string where = source + ": ";
+  extract_drive(rec, where, data);
+  std::array<MeasuredSeries, kOutputCount> series = extract_outputs(rec, where, data);
   for (MeasuredSeries& s : series)
     if (s.time_s.size() >= 20) data.outputs.push_back(std::move(s));
   const bool has_tip_output = std::any_of(data.outputs.begin(), data.outputs.end(), [](const MeasuredSeries& s) {

@@ -43,7 +43,9 @@ struct MeasuredSeries {
   std::vector<Eigen::Vector3d> value;
 };
 
-struct BenchData {
+/// Any recording's drive and measured outputs: a bench's, a patient's or one `scopekin simulate`
+/// wrote.
+struct MeasuredRecording {
   std::string source;
   std::vector<DriveSample> drive;        ///< every encoder sample
   std::vector<MeasuredSeries> outputs;   ///< only outputs the recording has (>= 20 samples)
@@ -67,6 +69,6 @@ inline constexpr double kMinDuration_s = 12.0;
 
 /// Extracts and checks. Samples of outputs sampled at 1 kHz (handle) are thinned to the EM
 /// tracker's rate (every 33 ms) so that no output outweighs another by its rate alone.
-BenchData extract_bench_data(const recording::Recording& recording, const std::string& source);
+MeasuredRecording extract_measured_recording(const recording::Recording& recording, const std::string& source);
 
 }  // namespace scopekin::discrepancy

@@ -1,0 +1,79 @@
+#pragma once
+// The stages of the discrepancy workflow (README "Discrepancy workflow", steps 2 and 4), each a
+// function in its own file, in the order workflow.cpp calls them. Each works from the context
+// (context.hpp); what one finds, the next takes, and the report reads (Findings).
+//   stage_significance.cpp  is any output's held-out error beyond its noise? If not: verdict none
+//   stage_screening.cpp     one Gauss-Newton step per candidate, from a shared Jacobian
+//   stage_refinement.cpp    Levenberg-Marquardt on the best (and on a runner-up that comes close)
+//   stage_pairs.cpp         pairs or not (the score test), then the two best pairs side by side
+//   stage_verdict.cpp       named or unexplained; the named effects' uncertainty (and, fitted on
+//                           windows, their run over the whole recording)
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host_sim/discrepancy/context.hpp"
+#include "host_sim/discrepancy/fit.hpp"
+#include "host_sim/discrepancy/report.hpp"
+
+namespace scopekin::discrepancy {
+
+/// Candidates refined after screening (the rest keep their one-step fit).
+inline constexpr std::size_t kRefined = 2;
+/// The progress bar's steps: the model as given, screening, the refinements, pairs, verdict, report.
+inline constexpr double kProgressSteps = static_cast<double>(kRefined + 5);
+
+struct Significance {
+  nlohmann::ordered_json outputs = nlohmann::ordered_json::object();  ///< per output (report.json "significance")
+  std::size_t most_affected = 0;  ///< the assessed output with the largest held-out RMS error over its noise
+  bool any = false;               ///< an output's ratio exceeds the options' significance
+};
+
+struct Verdict {
+  std::string verdict = "none";           ///< none, named or unexplained
+  std::optional<std::size_t> named;       ///< index into the candidates of the effects named
+  nlohmann::ordered_json confirmation;    ///< fitted on windows: the named effects' full run
+};
+
+/// What the stages found.
+struct Findings {
+  Significance significance;
+  std::vector<EffectSetFit> candidates;   ///< every fit, best first (held-out cost)
+  nlohmann::ordered_json pair_test;       ///< the score test before pairs (when it ran)
+  Verdict verdict;
+};
+
+/// Significance: each output's held-out RMS error against its noise.
+Significance assess_significance(const DiscrepancyContext& context);
+
+/// Screening: every candidate of the library gets one Gauss-Newton step from its neutral values,
+/// with the Jacobian of all their parameters computed at the model as given (one run per
+/// parameter, in parallel), and one run at the step. One fit per candidate, library order, no SDs.
+std::vector<EffectSetFit> screen_candidates(const DiscrepancyContext& context);
+
+/// Refinement: the best screened candidate refined by Levenberg-Marquardt; the next one while the
+/// refined ones explain too little, or when its screening step came close. Returns every fit,
+/// ranked (by_held_out, prefer_simpler).
+std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
+                                            const std::vector<EffectSetFit>& screened, StageLog& stages);
+
+struct PairsOutcome {
+  std::optional<std::size_t> chosen;  ///< index into the candidates of the set to name, if any
+  nlohmann::ordered_json pair_test;   ///< the score test (when it ran)
+};
+/// Pairs: names the best single effect when it explains enough and leaves nothing that a partner
+/// is predicted to remove; otherwise, if it explains at least a little, fits the two pairs best
+/// by their linearised joint step side by side, and names the best pair when it does better.
+/// Adds the pairs to `candidates` (ahead of the singles when a pair is chosen).
+PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened,
+                       std::vector<EffectSetFit>& candidates, StageLog& stages);
+
+/// Verdict: `chosen` is named, with its parameters' uncertainty; fitted on windows, only if its
+/// run over the whole recording explains min_share too (its prediction is then that run's).
+Verdict give_verdict(const DiscrepancyContext& context, std::optional<std::size_t> chosen,
+                     std::vector<EffectSetFit>& candidates, StageLog& stages);
+
+}  // namespace scopekin::discrepancy
