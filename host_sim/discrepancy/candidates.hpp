@@ -4,7 +4,7 @@
 // and the step of the finite-difference Jacobian), which are held, and how fitted values become
 // the effect's entry in truth_effects.
 //
-// Held parameters (stated, README "Discrepancy workflow"): viscoadhesive_friction's cap
+// Held parameters (stated, host_sim/discrepancy/README.md): viscoadhesive_friction's cap
 // max_friction_increase (0.25), mesenteric_retraction's exponent (1), ei_profile's bending
 // section (none). sigmoid_mobility is linear in A cos(phi) and A sin(phi) for a given frequency
 // and direction; those two are fitted, and the frequency is read off the

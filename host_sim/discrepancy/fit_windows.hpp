@@ -1,5 +1,5 @@
 #pragma once
-// Fit windows: how the fits stay fast on a long recording (README "Discrepancy workflow").
+// Fit windows: how the fits stay fast on a long recording (host_sim/discrepancy/README.md).
 // A fit needs tens of model runs, and over a 10-minute recording each run takes about 20 s. So
 // when the recording is longer than the fit budget, a fit's run does not simulate all of it: in
 // each of the kBlocks blocks it simulates one window of budget / kBlocks seconds, restarted
@@ -29,7 +29,7 @@ inline constexpr double kSpinUp_s = 3.0;
 /// Recording seconds one fit run simulates by default (the 10-minute recording in under 2 minutes).
 inline constexpr double kDefaultFitBudget_s = 80.0;
 /// The smallest budget: windows of 8 s, 5 s scored after the spin-up. Measured on 10-minute
-/// recordings (README "Discrepancy workflow"): 6 s windows (3 s scored) and 7 s windows with a 2 s
+/// recordings (host_sim/discrepancy/README.md): 6 s windows (3 s scored) and 7 s windows with a 2 s
 /// spin-up named ei_scale for a hidden ei_profile and missed a pair; 8 s windows named all seven
 /// cases right.
 inline constexpr double kMinFitBudget_s = 80.0;

@@ -64,7 +64,7 @@ struct MeasuredRecording {
   double roll_at(double time_s) const;
 };
 
-/// Shortest recording accepted [s]: the held-out blocks need room (README "Discrepancy workflow").
+/// Shortest recording accepted [s]: the held-out blocks need room (host_sim/discrepancy/README.md).
 inline constexpr double kMinDuration_s = 12.0;
 
 /// Extracts and checks. Samples of outputs sampled at 1 kHz (handle) are thinned to the EM

@@ -1,5 +1,5 @@
 #pragma once
-// The model the discrepancy workflow tests (README "Discrepancy workflow"): a world scenario
+// The model the discrepancy workflow tests (host_sim/discrepancy/README.md): a world scenario
 // without its run, read and checked once (model::read_world_model). The recording gives the run:
 // the scope's first insertion and the hand's motion (model_run.hpp). The truth effects stay
 // entries of the effect library (model/effects/EFFECTS.md), as the candidates' fitted effects

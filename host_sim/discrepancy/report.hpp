@@ -1,5 +1,5 @@
 #pragma once
-// What the discrepancy workflow reports: report.json (README "Discrepancy workflow", step 6),
+// What the discrepancy workflow reports: report.json (host_sim/discrepancy/README.md, step 6),
 // built from the context and what the stages found, and the stages' own log: runs, recording
 // seconds simulated and wall time per stage (report.json "stages"), with the progress shown
 // while they run.

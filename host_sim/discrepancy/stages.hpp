@@ -1,5 +1,5 @@
 #pragma once
-// The stages of the discrepancy workflow (README "Discrepancy workflow", steps 2 and 4), each a
+// The stages of the discrepancy workflow (host_sim/discrepancy/README.md, steps 2 and 4), each a
 // function in its own file, in the order workflow.cpp calls them. Each works from the context
 // (context.hpp); what one finds, the next takes, and the report reads (Findings).
 //   stage_significance.cpp  is any output's held-out error beyond its noise? If not: verdict none

@@ -15,7 +15,7 @@ namespace {
 namespace mc = model::measured_cantilever;
 using Json = nlohmann::ordered_json;
 
-/// The thesis's chapter-5 average EI (PHYSICS.md 2): 350 N cm^2.
+/// The thesis's chapter-5 average EI (model/PHYSICS.md §2.5): 350 N cm^2.
 constexpr double kEiAsGiven_Nmm2 = 35000.0;
 /// Bounds of a fitted EI [N mm^2]: 150-1000 N cm^2, well outside the thesis's 260-660 N cm^2.
 constexpr double kEiMin_Nmm2 = 15000.0;

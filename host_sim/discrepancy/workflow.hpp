@@ -1,5 +1,5 @@
 #pragma once
-// The discrepancy workflow (README "Discrepancy workflow"): simulate the recording's hand motion
+// The discrepancy workflow (host_sim/discrepancy/README.md): simulate the recording's hand motion
 // with the model, locate where model and measurement disagree beyond the sensor noise, fit the
 // candidate effects (screening all, refining the best; then pairs) on the training blocks, judge
 // them on the held-out blocks, and give a verdict:
