@@ -24,21 +24,21 @@ inline constexpr std::uint8_t kCanMaxLength = 8;                  ///< classic C
 enum CanErrorClass : std::uint32_t {
     kCanErrorTxTimeout = 0x001U,
     kCanErrorLostArbitration = 0x002U,
-    kCanErrorController = 0x004U,   ///< data[1] holds the controller state (warning/passive)
+    kCanErrorController = 0x004U,  ///< data[1] holds the controller state (warning/passive)
     kCanErrorProtocol = 0x008U,
     kCanErrorTransceiver = 0x010U,
     kCanErrorNoAck = 0x020U,
     kCanErrorBusOff = 0x040U,
     kCanErrorBusError = 0x080U,
-    kCanErrorRestarted = 0x100U,    ///< the controller left bus-off
+    kCanErrorRestarted = 0x100U,  ///< the controller left bus-off
 };
 
 struct CanFrame {
-    std::uint32_t id{0};          ///< identifier (11 or 29 bits), or error classes if `error`
-    bool extended{false};         ///< 29-bit identifier
-    bool remote{false};           ///< remote transmission request (no data)
-    bool error{false};            ///< error frame reported by the controller / driver
-    std::uint8_t length{0};       ///< data length 0..8
+    std::uint32_t id{0};     ///< identifier (11 or 29 bits), or error classes if `error`
+    bool extended{false};    ///< 29-bit identifier
+    bool remote{false};      ///< remote transmission request (no data)
+    bool error{false};       ///< error frame reported by the controller / driver
+    std::uint8_t length{0};  ///< data length 0..8
     std::array<std::uint8_t, kCanMaxLength> data{};
 };
 
@@ -51,10 +51,10 @@ struct ReceivedCanFrame {
 
 enum class CanStatus : std::uint8_t {
     ok,
-    timeout,       ///< nothing received / could not send within the timeout
-    bus_off,       ///< the controller is bus-off (or the interface is down): frame not sent
-    invalid,       ///< the frame itself is invalid (length > 8, id out of range): not sent
-    failed,        ///< any other backend error (counted in CanCounters::backend_errors)
+    timeout,  ///< nothing received / could not send within the timeout
+    bus_off,  ///< the controller is bus-off (or the interface is down): frame not sent
+    invalid,  ///< the frame itself is invalid (length > 8, id out of range): not sent
+    failed,   ///< any other backend error (counted in CanCounters::backend_errors)
 };
 
 /// Counters since the bus was opened (they wrap at 2^32).

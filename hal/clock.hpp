@@ -28,7 +28,8 @@ protected:
 class PeriodicTimer {
 public:
     PeriodicTimer(MonotonicClock& clock, std::uint32_t period_us)
-        : clock_(&clock), period_us_(period_us == 0U ? 1U : period_us),
+        : clock_(&clock),
+          period_us_(period_us == 0U ? 1U : period_us),
           next_deadline_us_(clock.now_us() + period_us_) {}
 
     /// Waits for the next release; returns the release time (the deadline, in µs).

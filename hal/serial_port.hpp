@@ -11,10 +11,10 @@
 namespace scopekin::hal {
 
 enum class SerialStatus : std::uint8_t {
-    ok,        ///< count bytes transferred (may be fewer than asked)
-    timeout,   ///< nothing transferred within the timeout
-    closed,    ///< the other end went away (hang-up, EOF); reopening is the caller's business
-    failed,    ///< any other backend error (counted in SerialCounters::backend_errors)
+    ok,       ///< count bytes transferred (may be fewer than asked)
+    timeout,  ///< nothing transferred within the timeout
+    closed,   ///< the other end went away (hang-up, EOF); reopening is the caller's business
+    failed,   ///< any other backend error (counted in SerialCounters::backend_errors)
 };
 
 struct SerialTransfer {
@@ -25,7 +25,7 @@ struct SerialTransfer {
 struct SerialCounters {
     std::uint32_t bytes_received{0};
     std::uint32_t bytes_sent{0};
-    std::uint32_t overruns{0};         ///< bytes lost by the receiver (UART overrun), if known
+    std::uint32_t overruns{0};  ///< bytes lost by the receiver (UART overrun), if known
     std::uint32_t backend_errors{0};
 };
 

@@ -7,8 +7,8 @@
 namespace scopekin::model {
 
 class ModelError : public std::runtime_error {
- public:
-  explicit ModelError(const std::string& message) : std::runtime_error(message) {}
+public:
+    explicit ModelError(const std::string& message) : std::runtime_error(message) {}
 };
 
 /// Throws ModelError("<field>: <value> must be <rule>") unless value is finite and > 0.

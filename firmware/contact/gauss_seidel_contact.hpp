@@ -296,9 +296,8 @@ struct ContactScalarTraits<fixed_point::Q16_16> {
 private:
     /// Bits of a non-negative raw value (0 for x <= 0).
     static constexpr int bit_width(Scalar x) noexcept {
-        return x.raw() <= 0
-                   ? 0
-                   : static_cast<int>(std::bit_width(static_cast<std::uint32_t>(x.raw())));
+        return x.raw() <= 0 ? 0
+                            : static_cast<int>(std::bit_width(static_cast<std::uint32_t>(x.raw())));
     }
 };
 
@@ -481,8 +480,9 @@ void project_onto_disc(Scalar& f_t, Scalar& f_s, Scalar limit) noexcept {
 
 /// f_old + omega (f_new - f_old), projected onto f_n >= 0 and ||f_T|| <= mu f_n.
 template <typename Scalar>
-ContactVec3<Scalar> relax_and_project(const ContactVec3<Scalar>& f_old, const ContactVec3<Scalar>& f_new,
-                                      Scalar omega, Scalar mu) noexcept {
+ContactVec3<Scalar> relax_and_project(const ContactVec3<Scalar>& f_old,
+                                      const ContactVec3<Scalar>& f_new, Scalar omega,
+                                      Scalar mu) noexcept {
     using T = ContactScalarTraits<Scalar>;
     ContactVec3<Scalar> f{};
     for (std::size_t i = 0; i < 3U; ++i) {
@@ -503,9 +503,9 @@ ContactVec3<Scalar> relax_and_project(const ContactVec3<Scalar>& f_old, const Co
 /// where kappa is large; callers divide by det_p only where it is well scaled.
 /// Returns false if p <= 0 or det_p <= 0.
 template <typename Scalar>
-bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2>& e,
-                      Scalar kappa, std::array<Scalar, 2>& f_t,
-                      std::array<Scalar, 2>& df_t_num, Scalar& det_p) noexcept {
+bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2>& e, Scalar kappa,
+                      std::array<Scalar, 2>& f_t, std::array<Scalar, 2>& df_t_num,
+                      Scalar& det_p) noexcept {
     using T = ContactScalarTraits<Scalar>;
     const Scalar m00 = s[0] + kappa;
     const Scalar m11 = s[3] + kappa;
@@ -532,11 +532,10 @@ bool tangential_force(const std::array<Scalar, 4>& s, const std::array<Scalar, 2
 /// `local_iterations` steps (fixed work).  `previous` (optional): this contact's force from the
 /// last sweep, used only to start the slip root-finder (any start inside the bracket converges).
 template <typename Scalar>
-LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_aa,
-                                                 const ContactVec3<Scalar>& d_a, Scalar mu,
-                                                 std::size_t local_iterations,
-                                                 bool full_iterations,
-                                                 const ContactVec3<Scalar>* previous = nullptr) noexcept {
+LocalContactSolution<Scalar> solve_local_contact(
+    const ContactBlock3<Scalar>& w_aa, const ContactVec3<Scalar>& d_a, Scalar mu,
+    std::size_t local_iterations, bool full_iterations,
+    const ContactVec3<Scalar>* previous = nullptr) noexcept {
     using T = ContactScalarTraits<Scalar>;
     const Scalar zero = T::zero();
     const Scalar one = T::one();
@@ -628,7 +627,7 @@ LocalContactSolution<Scalar> solve_local_contact(const ContactBlock3<Scalar>& w_
     }
     const Scalar b_1 = T::abs(b[0]) + T::abs(b[1]);
     const Scalar e_1 = T::abs(e[0]) + T::abs(e[1]);
-    Scalar lo = zero;                                          // phi(lo) > 0 (stick rejected)
+    Scalar lo = zero;                                        // phi(lo) > 0 (stick rejected)
     Scalar hi = detail::mul_div(one + mu * b_1, e_1, mu_c);  // phi(hi) < 0 (see header)
     if (hi > T::kappa_max()) {
         // Fixed point only (kappa_max is +infinity for floating point): the bracket is clamped to
@@ -796,8 +795,8 @@ ContactSolveReport<Scalar, MaxContacts> solve_contacts(
     if (relaxed && !(settings.relaxation < T::one() + T::one())) {
         return report;  // omega must be in (0, 2)
     }
-    report.status = fixed ? ContactSolveStatus::fixed_sweeps_done
-                          : ContactSolveStatus::max_sweeps_reached;
+    report.status =
+        fixed ? ContactSolveStatus::fixed_sweeps_done : ContactSolveStatus::max_sweeps_reached;
 
     for (std::size_t sweep = 0; sweep < settings.max_sweeps; ++sweep) {  // bound: max_sweeps
         Scalar change = zero;

@@ -82,7 +82,8 @@ EmTrackerServiceResult EmTrackerDriver::service(SerialPort& port, std::uint64_t 
     return result;
 }
 
-EmTrackerServiceResult EmTrackerDriver::service(SerialPort& port, const MonotonicClock& clock) noexcept {
+EmTrackerServiceResult EmTrackerDriver::service(SerialPort& port,
+                                                const MonotonicClock& clock) noexcept {
     return service(port, clock.now_us());
 }
 

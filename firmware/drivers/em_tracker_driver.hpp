@@ -65,18 +65,19 @@ struct EmTrackerDriverConfig {
 
 /// Counters since construction (wrap at 2^32).  A sample with several faults counts in each.
 struct EmTrackerDriverCounters {
-    std::uint32_t poses_ok{0};             ///< valid poses (no fault flag)
-    std::uint32_t tip_forces_ok{0};        ///< valid tip forces
+    std::uint32_t poses_ok{0};       ///< valid poses (no fault flag)
+    std::uint32_t tip_forces_ok{0};  ///< valid tip forces
     std::uint32_t unknown_sensor{0};
     std::uint32_t out_of_range{0};
     std::uint32_t quaternion_norm{0};
     std::uint32_t timestamp_backwards{0};  ///< device time not increasing (backwards or repeated)
     std::uint32_t device_status{0};
-    std::uint32_t stale_events{0};         ///< fresh -> stale transitions of monitored sources
-    std::uint32_t samples_dropped{0};      ///< queue overflows (oldest sample dropped)
-    std::uint32_t malformed_payload{0};    ///< frames the decoder refused (cannot happen: the framer checks)
-    std::uint32_t serial_closed{0};        ///< reads that returned SerialStatus::closed
-    std::uint32_t serial_errors{0};        ///< reads that returned SerialStatus::failed
+    std::uint32_t stale_events{0};     ///< fresh -> stale transitions of monitored sources
+    std::uint32_t samples_dropped{0};  ///< queue overflows (oldest sample dropped)
+    std::uint32_t malformed_payload{
+        0};  ///< frames the decoder refused (cannot happen: the framer checks)
+    std::uint32_t serial_closed{0};            ///< reads that returned SerialStatus::closed
+    std::uint32_t serial_errors{0};            ///< reads that returned SerialStatus::failed
     protocol::EmTrackerFramerCounters link{};  ///< bad checksum, bad length, unknown type, ...
 };
 
@@ -84,7 +85,7 @@ struct EmTrackerDriverCounters {
 struct EmTrackerServiceResult {
     SerialStatus status{SerialStatus::timeout};  ///< ok if any byte was read, else the last status
     std::uint32_t bytes_read{0};
-    std::uint32_t samples{0};                    ///< samples queued (valid or flagged)
+    std::uint32_t samples{0};  ///< samples queued (valid or flagged)
 };
 
 class EmTrackerDriver {
@@ -126,7 +127,9 @@ public:
     [[nodiscard]] const EmPoseSample& latest_pose(EmSensor sensor) const noexcept;
     [[nodiscard]] bool has_pose(EmSensor sensor) const noexcept;
     [[nodiscard]] const TipForceSample& latest_tip_force() const noexcept { return latest_force_; }
-    [[nodiscard]] bool has_tip_force() const noexcept { return (valid_mask_ & kEmSourceTipForce) != 0U; }
+    [[nodiscard]] bool has_tip_force() const noexcept {
+        return (valid_mask_ & kEmSourceTipForce) != 0U;
+    }
 
     /// kEmFaultStale if a monitored source is stale now, plus every fault event since the last
     /// take_fault_flags().
@@ -141,11 +144,13 @@ public:
 
 private:
     /// False (counted as malformed_payload) if the decoder refused the frame.
-    [[nodiscard]] bool handle_frame(const protocol::EmTrackerFrame& frame, std::uint64_t now_us) noexcept;
+    [[nodiscard]] bool handle_frame(const protocol::EmTrackerFrame& frame,
+                                    std::uint64_t now_us) noexcept;
     void handle_pose(const protocol::EmPoseMessage& message, std::uint64_t now_us) noexcept;
     void handle_tip_force(const protocol::TipForceMessage& message, std::uint64_t now_us) noexcept;
     /// Checks device time against the source's previous one and makes it the new reference.
-    [[nodiscard]] bool device_time_increases(std::size_t source, std::uint32_t device_time_us) noexcept;
+    [[nodiscard]] bool device_time_increases(std::size_t source,
+                                             std::uint32_t device_time_us) noexcept;
     void count_sample_faults(std::uint32_t flags) noexcept;
     void mark_valid(std::size_t source, std::uint64_t now_us) noexcept;
     void enqueue(const EmTrackerSample& sample) noexcept;
@@ -160,8 +165,10 @@ private:
 
     std::array<EmPoseSample, kEmSensorCount> latest_pose_{};
     TipForceSample latest_force_{};
-    std::array<std::uint64_t, kEmSourceCount> last_valid_us_{};     ///< receive time of the last valid sample
-    std::array<std::uint32_t, kEmSourceCount> last_device_time_us_{};  ///< reference for the time check
+    std::array<std::uint64_t, kEmSourceCount>
+        last_valid_us_{};  ///< receive time of the last valid sample
+    std::array<std::uint32_t, kEmSourceCount>
+        last_device_time_us_{};         ///< reference for the time check
     std::uint8_t valid_mask_{0};        ///< sources that have had a valid sample
     std::uint8_t device_time_mask_{0};  ///< sources with a device time reference
     std::uint8_t stale_mask_{0};

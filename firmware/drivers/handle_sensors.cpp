@@ -11,7 +11,8 @@ using namespace messages;  // the BoxFault bits this driver sets
 
 void HandleSensors::note_counter(Channel& channel, std::uint8_t counter) {
     if (channel.counter_known) {
-        const auto expected = static_cast<std::uint8_t>((channel.last_counter + 1U) % kCounterModulo);
+        const auto expected =
+            static_cast<std::uint8_t>((channel.last_counter + 1U) % kCounterModulo);
         if (counter != expected) {
             counters_.counter_gaps +=
                 static_cast<std::uint32_t>((counter + kCounterModulo - expected) % kCounterModulo);

@@ -37,8 +37,8 @@ struct HandleSensorCounters {
     std::uint32_t bad_length{0};
     std::uint32_t out_of_range{0};
     std::uint32_t sensor_status{0};
-    std::uint32_t counter_gaps{0};          ///< frames missing according to the counters
-    std::uint32_t stale_events{0};          ///< times a sensor went stale
+    std::uint32_t counter_gaps{0};  ///< frames missing according to the counters
+    std::uint32_t stale_events{0};  ///< times a sensor went stale
 };
 
 class HandleSensors {
@@ -59,8 +59,8 @@ public:
 
 private:
     struct Channel {
-        bool seen{false};          ///< a valid sample arrived at least once
-        bool fresh{false};         ///< ... since the last take_samples()
+        bool seen{false};   ///< a valid sample arrived at least once
+        bool fresh{false};  ///< ... since the last take_samples()
         bool stale{true};
         bool counter_known{false};
         std::uint8_t last_counter{0};

@@ -11,7 +11,9 @@ constexpr std::uint8_t kCtrlRxPassive = 0x10U;
 constexpr std::uint8_t kCtrlTxPassive = 0x20U;
 constexpr std::uint8_t kCtrlActive = 0x40U;
 
-constexpr std::uint8_t rank(protocol::CanState state) { return static_cast<std::uint8_t>(state); }
+constexpr std::uint8_t rank(protocol::CanState state) {
+    return static_cast<std::uint8_t>(state);
+}
 }  // namespace
 
 void CanHealth::enter(protocol::CanState state) {

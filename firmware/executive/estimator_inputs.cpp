@@ -3,7 +3,8 @@
 
 namespace scopekin::executive {
 
-void keep_tracker_sample(const messages::EmTrackerSample& sample, kinetics::TrackerInputs& tracker) {
+void keep_tracker_sample(const messages::EmTrackerSample& sample,
+                         kinetics::TrackerInputs& tracker) {
     std::uint8_t source_bit = 0;
     if (sample.kind == messages::EmTrackerSampleKind::tip_force) {
         if (sample.tip_force.fault_flags != 0U) return;
@@ -11,7 +12,8 @@ void keep_tracker_sample(const messages::EmTrackerSample& sample, kinetics::Trac
         source_bit = messages::kEmSourceTipForce;
     } else {
         // A valid pose has a known sensor id (kEmFaultUnknownSensor otherwise).
-        if (sample.pose.fault_flags != 0U || sample.pose.sensor_id >= messages::kEmSensorCount) return;
+        if (sample.pose.fault_flags != 0U || sample.pose.sensor_id >= messages::kEmSensorCount)
+            return;
         tracker.pose[sample.pose.sensor_id] = sample.pose;
         source_bit = static_cast<std::uint8_t>(1U << sample.pose.sensor_id);
     }

@@ -197,7 +197,8 @@ void SensorBox::publish_outputs() {
     counter.index = static_cast<protocol::BoxCounterIndex>(counter_cursor_);
     counter.value = counter_value(counter.index);
     publish(protocol::encode(counter));
-    counter_cursor_ = static_cast<std::uint8_t>((counter_cursor_ + 1U) % protocol::kBoxCounterCount);
+    counter_cursor_ =
+        static_cast<std::uint8_t>((counter_cursor_ + 1U) % protocol::kBoxCounterCount);
 }
 
 void SensorBox::publish_status(bool faults_changed) {

@@ -44,21 +44,21 @@ namespace scopekin::executive {
 inline constexpr std::uint16_t kMaxFramesPerPeriod = 128;
 
 struct BoxConfig {
-    std::uint32_t period_us{5000};             ///< 1 ms .. 1 s; sets kinetics.period_s
-    kinetics::Config kinetics{};               ///< period_s is overwritten from period_us
+    std::uint32_t period_us{5000};  ///< 1 ms .. 1 s; sets kinetics.period_s
+    kinetics::Config kinetics{};    ///< period_s is overwritten from period_us
     drivers::HandleSensorConfig handle_sensors{};
     drivers::EmTrackerDriverConfig em_tracker{};
-    std::uint16_t status_every_periods{20};    ///< heartbeat: 100 ms at 5 ms
-    std::uint32_t send_timeout_us{0};          ///< per frame; 0: never block the period
+    std::uint16_t status_every_periods{20};  ///< heartbeat: 100 ms at 5 ms
+    std::uint32_t send_timeout_us{0};        ///< per frame; 0: never block the period
 };
 
 struct BoxCounters {
     std::uint32_t periods{0};
-    std::uint32_t frames_read{0};        ///< everything received (data and error frames)
-    std::uint32_t unknown_ids{0};        ///< data frames no driver claimed
+    std::uint32_t frames_read{0};  ///< everything received (data and error frames)
+    std::uint32_t unknown_ids{0};  ///< data frames no driver claimed
     std::uint32_t frames_published{0};
     std::uint32_t send_failures{0};
-    std::uint32_t period_overruns{0};    ///< as reported by main's timer
+    std::uint32_t period_overruns{0};  ///< as reported by main's timer
 };
 
 class SensorBox {
@@ -108,7 +108,7 @@ private:
     BoxCounters counters_{};
     protocol::BoxState box_state_{protocol::BoxState::starting};
     std::uint16_t box_faults_{0};
-    std::uint16_t period_faults_{0};      ///< gathered during the period
+    std::uint16_t period_faults_{0};  ///< gathered during the period
     std::uint32_t last_can_dropped_{0};
     std::uint16_t last_status_box_faults_{0};
     std::uint16_t last_status_kinetic_faults_{0};

@@ -21,8 +21,8 @@ static_assert((std::int64_t{1} << 46) * static_cast<std::int64_t>(ProductAccumul
 
 // The root of the largest Q32.32 value fits the 32-step bit-by-bit method's 2^32 result range,
 // and the widened sqrt_sat argument (raw * 2^16 < 2^47) gives a root below 2^24.
-static_assert(detail::isqrt_round(std::numeric_limits<std::uint64_t>::max()) ==
-              std::uint64_t{1} << 32);
+static_assert(detail::isqrt_round(std::numeric_limits<std::uint64_t>::max()) == std::uint64_t{1}
+                                                                                    << 32);
 static_assert(detail::isqrt_round(std::uint64_t{1} << 62) == std::uint64_t{1} << 31);
 
 // The widened dividend of div_sat: |a| * 2^16 <= 2^47, far inside int64.

@@ -183,8 +183,7 @@ constexpr Q16_16 Q16_16::from_int(std::int32_t value) noexcept {
 
 constexpr Q16_16 Q16_16::from_ratio(std::int32_t numerator, std::int32_t denominator) noexcept {
     // |num| * 2^16 <= 2^47: exact.
-    return Q16_16{
-        detail::divide_round_saturate(std::int64_t{numerator} * one_raw, denominator)};
+    return Q16_16{detail::divide_round_saturate(std::int64_t{numerator} * one_raw, denominator)};
 }
 
 constexpr std::int32_t Q16_16::to_int() const noexcept {
@@ -325,11 +324,21 @@ template <std::size_t N>
 
 /// Saturating arithmetic operators, identical to the named functions (so generic kernels can be
 /// written once for `double` and for Q16_16).
-[[nodiscard]] constexpr Q16_16 operator+(Q16_16 a, Q16_16 b) noexcept { return add_sat(a, b); }
-[[nodiscard]] constexpr Q16_16 operator-(Q16_16 a, Q16_16 b) noexcept { return sub_sat(a, b); }
-[[nodiscard]] constexpr Q16_16 operator-(Q16_16 a) noexcept { return neg_sat(a); }
-[[nodiscard]] constexpr Q16_16 operator*(Q16_16 a, Q16_16 b) noexcept { return mul_sat(a, b); }
-[[nodiscard]] constexpr Q16_16 operator/(Q16_16 a, Q16_16 b) noexcept { return div_sat(a, b); }
+[[nodiscard]] constexpr Q16_16 operator+(Q16_16 a, Q16_16 b) noexcept {
+    return add_sat(a, b);
+}
+[[nodiscard]] constexpr Q16_16 operator-(Q16_16 a, Q16_16 b) noexcept {
+    return sub_sat(a, b);
+}
+[[nodiscard]] constexpr Q16_16 operator-(Q16_16 a) noexcept {
+    return neg_sat(a);
+}
+[[nodiscard]] constexpr Q16_16 operator*(Q16_16 a, Q16_16 b) noexcept {
+    return mul_sat(a, b);
+}
+[[nodiscard]] constexpr Q16_16 operator/(Q16_16 a, Q16_16 b) noexcept {
+    return div_sat(a, b);
+}
 
 using Q16_16Vec3 = std::array<Q16_16, 3>;
 

@@ -30,14 +30,16 @@ bool limits_valid(const InputLimits& l) noexcept {
 
 ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault) noexcept {
     tables_fault = check_reduced_tables(config.tables, kStationCapacity);
-    if (!(config.period_s > Q16_16{}) || config.period_s > Q16_16::from_int(1)) return ConfigFault::period;
-    if (config.contact_sweeps == 0U || config.contact_sweeps > 64U || config.contact_local_iterations == 0U ||
-        config.contact_local_iterations > 64U) {
+    if (!(config.period_s > Q16_16{}) || config.period_s > Q16_16::from_int(1))
+        return ConfigFault::period;
+    if (config.contact_sweeps == 0U || config.contact_sweeps > 64U ||
+        config.contact_local_iterations == 0U || config.contact_local_iterations > 64U) {
         return ConfigFault::contact_settings;
     }
     if (!limits_valid(config.limits)) return ConfigFault::limits;
     if (tables_fault != ReducedTablesFault::none) return ConfigFault::tables;
-    if (!AdvanceEfficiency<>::valid(config.efficiency) || !SelfLockMonitor::valid(config.self_lock) ||
+    if (!AdvanceEfficiency<>::valid(config.efficiency) ||
+        !SelfLockMonitor::valid(config.self_lock) ||
         !ContactForceMonitor::valid(config.contact_force)) {
         return ConfigFault::monitors;
     }
@@ -45,8 +47,9 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
 }
 
 /// A held, range-checked signal: returns the value to use, sets the stale / range bits.
-Q16_16 validate_signal(bool fresh, Q16_16 reading, Q16_16 held, Q16_16 max_abs, std::uint32_t stale_bit,
-                       std::uint32_t range_bit, std::uint32_t& faults) noexcept {
+Q16_16 validate_signal(bool fresh, Q16_16 reading, Q16_16 held, Q16_16 max_abs,
+                       std::uint32_t stale_bit, std::uint32_t range_bit,
+                       std::uint32_t& faults) noexcept {
     if (!fresh) {
         faults |= stale_bit;
         return held;
@@ -104,9 +107,11 @@ ContactForceLevel output_level(monitors::ContactForceLevel level) noexcept {
 
 /// Tip velocity: mean over the ring (oldest to newest), 0 until it holds two samples.
 Q16_16 tip_velocity(State& state, Q16_16 tip_mm, std::uint32_t& faults) noexcept {
-    const std::size_t oldest = state.tip_history_count < kVelocityWindow ? 0U : state.tip_history_next;
+    const std::size_t oldest =
+        state.tip_history_count < kVelocityWindow ? 0U : state.tip_history_next;
     const Q16_16 first = state.tip_history_mm[oldest];
-    const std::size_t spans = state.tip_history_count < kVelocityWindow ? state.tip_history_count : kVelocityWindow;
+    const std::size_t spans =
+        state.tip_history_count < kVelocityWindow ? state.tip_history_count : kVelocityWindow;
     state.tip_history_mm[state.tip_history_next] = tip_mm;
     state.tip_history_next = (state.tip_history_next + 1U) % kVelocityWindow;
     if (state.tip_history_count < kVelocityWindow) ++state.tip_history_count;
@@ -140,14 +145,16 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
 
     // 1. Inputs.
     validate_insertion(inputs, state, faults);
-    state.handle_force_N = validate_signal((inputs.fresh_mask & kHandleForce) != 0U, inputs.handle_force_N,
-                                           state.handle_force_N, config.limits.force_max_abs_N, kFaultForceStale,
-                                           kFaultForceRange, faults);
-    state.handle_torque_Nmm = validate_signal((inputs.fresh_mask & kHandleTorque) != 0U, inputs.handle_torque_Nmm,
-                                              state.handle_torque_Nmm, config.limits.torque_max_abs_Nmm,
-                                              kFaultTorqueStale, kFaultTorqueRange, faults);
-    state.roll_rad = validate_signal((inputs.fresh_mask & kRoll) != 0U, inputs.roll_rad, state.roll_rad,
-                                     config.limits.roll_max_abs_rad, kFaultRollStale, kFaultRollRange, faults);
+    state.handle_force_N = validate_signal(
+        (inputs.fresh_mask & kHandleForce) != 0U, inputs.handle_force_N, state.handle_force_N,
+        config.limits.force_max_abs_N, kFaultForceStale, kFaultForceRange, faults);
+    state.handle_torque_Nmm =
+        validate_signal((inputs.fresh_mask & kHandleTorque) != 0U, inputs.handle_torque_Nmm,
+                        state.handle_torque_Nmm, config.limits.torque_max_abs_Nmm,
+                        kFaultTorqueStale, kFaultTorqueRange, faults);
+    state.roll_rad =
+        validate_signal((inputs.fresh_mask & kRoll) != 0U, inputs.roll_rad, state.roll_rad,
+                        config.limits.roll_max_abs_rad, kFaultRollStale, kFaultRollRange, faults);
 
     // 2. The reduced model (no estimate before the first insertion sample: the depth is unknown).
     if (!state.insertion_seen) {
@@ -158,12 +165,13 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     gauss_seidel.mode = contact::SweepMode::fixed;
     gauss_seidel.max_sweeps = config.contact_sweeps;
     gauss_seidel.local_iterations = config.contact_local_iterations;
-    const ReducedStepReport<Q16_16, kStationCapacity> report =
-        reduced_step(*config.tables, state.insertion_mm, config.period_s, state.model, gauss_seidel);
+    const ReducedStepReport<Q16_16, kStationCapacity> report = reduced_step(
+        *config.tables, state.insertion_mm, config.period_s, state.model, gauss_seidel);
     if (report.depth_clamped) faults |= kFaultDepthOutsideModel;
     const auto& residuals = report.contact.residuals;
     if (report.contact.status == contact::ContactSolveStatus::invalid_input ||
-        residuals.complementarity > kContactResidualBoundN || residuals.cone_violation > kContactResidualBoundN ||
+        residuals.complementarity > kContactResidualBoundN ||
+        residuals.cone_violation > kContactResidualBoundN ||
         residuals.friction > kContactResidualBoundN) {
         faults |= kFaultContactResidual;
     }
@@ -189,7 +197,8 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
             outputs.max_contact_station = static_cast<std::uint8_t>(j);
             outputs.max_contact_path_mm = out.path_position_mm;
         }
-        if (j < kDistalStations && out.state == StationState::sticking && !(out.normal_force_N < kMinContactForceN)) {
+        if (j < kDistalStations && out.state == StationState::sticking &&
+            !(out.normal_force_N < kMinContactForceN)) {
             ++outputs.distal_sticking;
         }
     }
@@ -199,12 +208,14 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     }
 
     // 4. Monitors.
-    const AdvanceEfficiency<>::Outputs efficiency = state.efficiency.step({model.tip_path_mm, state.insertion_mm});
+    const AdvanceEfficiency<>::Outputs efficiency =
+        state.efficiency.step({model.tip_path_mm, state.insertion_mm});
     outputs.advance_efficiency = efficiency.efficiency;
     SelfLockMonitor::Inputs lock_inputs{};
     // Self-locking is the tip's contact sticking (thesis 2.2.1): stations behind it stick in
     // stick-slip while the tip keeps pace with the hand.
-    lock_inputs.distal_sticking = model.active_stations > 0U && outputs.stations[0].state == StationState::sticking &&
+    lock_inputs.distal_sticking = model.active_stations > 0U &&
+                                          outputs.stations[0].state == StationState::sticking &&
                                           !(outputs.stations[0].normal_force_N < kMinContactForceN)
                                       ? 1U
                                       : 0U;
@@ -213,9 +224,11 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     lock_inputs.efficiency_defined = efficiency.defined;
     const SelfLockMonitor::Outputs lock = state.self_lock.step(lock_inputs);
     outputs.self_lock_alarm = lock.alarm;
-    const ContactForceMonitor::Outputs force_level = state.contact_force.step(outputs.max_contact_force_N);
+    const ContactForceMonitor::Outputs force_level =
+        state.contact_force.step(outputs.max_contact_force_N);
     outputs.contact_force_level = output_level(force_level.level);
-    if (efficiency.input_fault || lock.input_fault || force_level.input_fault) faults |= kFaultMonitorInput;
+    if (efficiency.input_fault || lock.input_fault || force_level.input_fault)
+        faults |= kFaultMonitorInput;
     outputs.fault_flags = faults;
 }
 

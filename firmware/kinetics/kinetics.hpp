@@ -48,12 +48,13 @@ namespace scopekin::kinetics {
 inline constexpr std::size_t kVelocityWindow = 10;
 
 struct InputLimits {
-    Q16_16 insertion_min_mm = Q16_16::from_int(-50);   ///< encoder reads a little below 0 at the anus
+    Q16_16 insertion_min_mm =
+        Q16_16::from_int(-50);  ///< encoder reads a little below 0 at the anus
     Q16_16 insertion_max_mm = Q16_16::from_int(2000);  ///< longer than any colonoscope (1.7 m)
     Q16_16 max_insertion_speed_mm_per_s = Q16_16::from_int(1000);  ///< a fast hand: ~0.5 m/s
-    Q16_16 force_max_abs_N = Q16_16::from_int(100);    ///< 2x the 43 N push of Appleyard 2000
+    Q16_16 force_max_abs_N = Q16_16::from_int(100);      ///< 2x the 43 N push of Appleyard 2000
     Q16_16 torque_max_abs_Nmm = Q16_16::from_int(2000);  ///< 2x the 1 N·m of Appleyard 2000
-    Q16_16 roll_max_abs_rad = Q16_16::from_int(315);   ///< 50 turns, unwrapped
+    Q16_16 roll_max_abs_rad = Q16_16::from_int(315);     ///< 50 turns, unwrapped
 };
 
 /// The kinetic estimator's self-lock settings: the monitor's defaults with T_on = 36 steps.

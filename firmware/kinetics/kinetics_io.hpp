@@ -47,56 +47,67 @@ struct TrackerInputs {
 /// One period's sensor samples (the executive assembles them from the drivers' messages:
 /// executive/estimator_inputs.hpp).
 struct Inputs {
-    Q16_16 handle_force_N{};       ///< axial force at the handle, + pushing in
-    Q16_16 handle_torque_Nmm{};    ///< torque about the shaft axis
-    Q16_16 insertion_mm{};         ///< scope length past the anus
-    Q16_16 roll_rad{};             ///< shaft roll, unwrapped
-    std::uint8_t fresh_mask{0};    ///< InputSignal bits: a new, valid sample arrived this period
-    TrackerInputs tracker{};       ///< test bench only (optional)
+    Q16_16 handle_force_N{};     ///< axial force at the handle, + pushing in
+    Q16_16 handle_torque_Nmm{};  ///< torque about the shaft axis
+    Q16_16 insertion_mm{};       ///< scope length past the anus
+    Q16_16 roll_rad{};           ///< shaft roll, unwrapped
+    std::uint8_t fresh_mask{0};  ///< InputSignal bits: a new, valid sample arrived this period
+    TrackerInputs tracker{};     ///< test bench only (optional)
 };
 
 /// Fault flags (Outputs::fault_flags, bit set = fault present this step).
 enum FaultFlag : std::uint32_t {
-    kFaultInsertionStale = 1U << 0U,      ///< no fresh insertion sample: depth held
-    kFaultInsertionRange = 1U << 1U,      ///< insertion outside the model's range: saturated
-    kFaultInsertionJump = 1U << 2U,       ///< insertion moved faster than a hand can: limited
+    kFaultInsertionStale = 1U << 0U,  ///< no fresh insertion sample: depth held
+    kFaultInsertionRange = 1U << 1U,  ///< insertion outside the model's range: saturated
+    kFaultInsertionJump = 1U << 2U,   ///< insertion moved faster than a hand can: limited
     kFaultForceStale = 1U << 3U,
     kFaultForceRange = 1U << 4U,
     kFaultTorqueStale = 1U << 5U,
     kFaultTorqueRange = 1U << 6U,
     kFaultRollStale = 1U << 7U,
     kFaultRollRange = 1U << 8U,
-    kFaultContactResidual = 1U << 9U,     ///< the contact solve left a residual above its bound
-    kFaultSaturation = 1U << 10U,         ///< an internal quantity hit its fixed-point limit
-    kFaultDepthOutsideModel = 1U << 11U,  ///< depth outside the reduced model's travel run in use (default 20..760 mm): clamped to it
-    kFaultConfig = 1U << 12U,             ///< init refused the configuration: no estimate
-    kFaultMonitorInput = 1U << 13U,       ///< a monitor rejected its input (held its output)
+    kFaultContactResidual = 1U << 9U,  ///< the contact solve left a residual above its bound
+    kFaultSaturation = 1U << 10U,      ///< an internal quantity hit its fixed-point limit
+    kFaultDepthOutsideModel =
+        1U
+        << 11U,  ///< depth outside the reduced model's travel run in use (default 20..760 mm): clamped to it
+    kFaultConfig = 1U << 12U,        ///< init refused the configuration: no estimate
+    kFaultMonitorInput = 1U << 13U,  ///< a monitor rejected its input (held its output)
 };
 
 /// Contact state of a station (mirrors contact::ContactState).
-enum class StationState : std::uint8_t { separated, sticking, slipping, degenerate };
+enum class StationState : std::uint8_t {
+    separated,
+    sticking,
+    slipping,
+    degenerate
+};
 
 struct StationEstimate {
-    Q16_16 arc_from_tip_mm{};       ///< where on the scope
-    Q16_16 path_position_mm{};      ///< where along the colon centerline (from the anus)
-    Q16_16 normal_force_N{};        ///< >= 0
-    Q16_16 tangential_force_N{};    ///< |f_T| >= 0
+    Q16_16 arc_from_tip_mm{};     ///< where on the scope
+    Q16_16 path_position_mm{};    ///< where along the colon centerline (from the anus)
+    Q16_16 normal_force_N{};      ///< >= 0
+    Q16_16 tangential_force_N{};  ///< |f_T| >= 0
     StationState state{StationState::separated};
 };
 
-enum class ContactForceLevel : std::uint8_t { normal, warning, critical };
+enum class ContactForceLevel : std::uint8_t {
+    normal,
+    warning,
+    critical
+};
 
 struct Outputs {
     std::uint32_t step_index{0};
-    Q16_16 tip_path_mm{};               ///< tip position along the colon centerline
-    Q16_16 tip_velocity_mm_per_s{};     ///< d/dt of tip_path_mm
-    Q16_16 advance_efficiency{};        ///< tip advance / handle advance over the window (0..1+)
+    Q16_16 tip_path_mm{};            ///< tip position along the colon centerline
+    Q16_16 tip_velocity_mm_per_s{};  ///< d/dt of tip_path_mm
+    Q16_16 advance_efficiency{};     ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};
-    std::uint8_t active_stations{0};    ///< stations inside the colon this step
-    Q16_16 max_contact_force_N{};       ///< largest |f| over stations
+    std::uint8_t active_stations{0};  ///< stations inside the colon this step
+    Q16_16 max_contact_force_N{};     ///< largest |f| over stations
     std::uint8_t max_contact_station{0};
-    Q16_16 max_contact_path_mm{};       ///< where along the colon
-    std::uint8_t distal_sticking{0};    ///< distal stations (< kDistalStations) in stick
+    Q16_16 max_contact_path_mm{};     ///< where along the colon
+    std::uint8_t distal_sticking{0};  ///< distal stations (< kDistalStations) in stick
     bool self_lock_alarm{false};
     ContactForceLevel contact_force_level{ContactForceLevel::normal};
     std::uint32_t fault_flags{0};

@@ -97,13 +97,13 @@ namespace scopekin::kinetics {
 
 /// Values per station per knot, in this order.
 enum ReducedStationValue : std::size_t {
-    kStationPath = 0,      ///< p [mm]
-    kStationGap = 1,       ///< g [mm]
-    kStationForceN = 2,    ///< f_n [N]
-    kStationForceT = 3,    ///< f_t [N]
-    kStationForceS = 4,    ///< f_s [N]
-    kStationSlid = 5,      ///< the training's slip from this knot to the next: +1 the stretch slid
-                           ///< towards larger path positions, -1 towards smaller ones, 0 it stuck
+    kStationPath = 0,    ///< p [mm]
+    kStationGap = 1,     ///< g [mm]
+    kStationForceN = 2,  ///< f_n [N]
+    kStationForceT = 3,  ///< f_t [N]
+    kStationForceS = 4,  ///< f_s [N]
+    kStationSlid = 5,    ///< the training's slip from this knot to the next: +1 the stretch slid
+                         ///< towards larger path positions, -1 towards smaller ones, 0 it stuck
     kStationValueCount = 6,
 };
 
@@ -149,13 +149,13 @@ enum ReducedSegmentKind : int {
 template <typename Scalar>
 struct ReducedSegment {
     int kind{kSegmentTravel};
-    int direction{1};               ///< travel: +1 trained advancing, -1 withdrawing; hold: +1
-    Scalar key_start{};             ///< travel: first knot's depth [mm]; hold: 0 [s]
-    Scalar key_step{};              ///< travel: [mm]; hold: [s]
-    Scalar hold_depth_mm{};         ///< hold: the depth held; travel: 0
-    std::size_t knots{0};            ///< >= 2, (knots - 1) a multiple of compliance_every
-    std::size_t first_knot{0};       ///< index of knot 0 in the tables' knot records
-    std::size_t first_compliance{0}; ///< index of its compliance record 0
+    int direction{1};                 ///< travel: +1 trained advancing, -1 withdrawing; hold: +1
+    Scalar key_start{};               ///< travel: first knot's depth [mm]; hold: 0 [s]
+    Scalar key_step{};                ///< travel: [mm]; hold: [s]
+    Scalar hold_depth_mm{};           ///< hold: the depth held; travel: 0
+    std::size_t knots{0};             ///< >= 2, (knots - 1) a multiple of compliance_every
+    std::size_t first_knot{0};        ///< index of knot 0 in the tables' knot records
+    std::size_t first_compliance{0};  ///< index of its compliance record 0
 };
 
 /// The tables' fixed facts (same meaning for every Scalar).
@@ -177,18 +177,19 @@ struct ReducedModelHeader {
 template <typename Scalar, std::size_t Stations>
 struct ReducedState {
     contact::ContactProblem<Scalar, Stations> problem{};
-    contact::ContactForces<Scalar, Stations> force_N{};                   ///< last solution (warm start)
+    contact::ContactForces<Scalar, Stations> force_N{};  ///< last solution (warm start)
     std::array<contact::ContactVec3<Scalar>, Stations> reference_force_N{};
-    std::array<contact::ContactVec3<Scalar>, Stations> elastic_mm{};      ///< u, station frame
-    std::array<Scalar, Stations> reference_path_mm{};                     ///< p at the last step
+    std::array<contact::ContactVec3<Scalar>, Stations> elastic_mm{};  ///< u, station frame
+    std::array<Scalar, Stations> reference_path_mm{};                 ///< p at the last step
     std::array<contact::ContactState, Stations> contact_state{};
     std::array<bool, Stations> passive{};  ///< the station follows the training this step
     std::size_t active_stations{0};
-    std::size_t segment{0};                ///< training run in use
-    int direction{1};                      ///< +1 advancing, -1 withdrawing (latched, see "Direction")
-    Scalar turn_depth_mm{};                ///< deepest (advancing) / shallowest (withdrawing) depth since the last turn
-    Scalar last_depth_mm{};                ///< the depth of the last step
-    std::uint32_t hold_steps{0};           ///< consecutive steps the depth has been held still (capped)
+    std::size_t segment{0};  ///< training run in use
+    int direction{1};        ///< +1 advancing, -1 withdrawing (latched, see "Direction")
+    Scalar
+        turn_depth_mm{};  ///< deepest (advancing) / shallowest (withdrawing) depth since the last turn
+    Scalar last_depth_mm{};       ///< the depth of the last step
+    std::uint32_t hold_steps{0};  ///< consecutive steps the depth has been held still (capped)
     Scalar tip_path_mm{};
     std::array<Scalar, 3> tip_position_mm{};  ///< training tip position at the depth (body frame)
     bool started{false};
@@ -197,7 +198,8 @@ struct ReducedState {
 template <typename Scalar, std::size_t Stations>
 struct ReducedStepReport {
     contact::ContactSolveReport<Scalar, Stations> contact{};
-    bool depth_clamped{false};  ///< the depth was outside the travel run in use and was clamped to it
+    bool depth_clamped{
+        false};  ///< the depth was outside the travel run in use and was clamped to it
 };
 
 /// Cap of a station's friction ratio |f_T| / f_n; beyond it the station is passive.
@@ -206,20 +208,23 @@ constexpr int kMaxStationFrictionRatio = 8;
 /// Where the training stuck, the station's cone is widened to hold its force with this margin.
 template <typename Scalar>
 Scalar stuck_margin() noexcept {
-    return ReducedScalarTraits<Scalar>::from_int(21) / ReducedScalarTraits<Scalar>::from_int(20);  // 1.05
+    return ReducedScalarTraits<Scalar>::from_int(21) /
+           ReducedScalarTraits<Scalar>::from_int(20);  // 1.05
 }
 
 /// Depth the hand must go back before the model takes the travel direction as reversed, and
 /// the distance from a hold run's depth within which a hold uses that run [mm].
 template <typename Scalar>
 Scalar reverse_hysteresis_mm() noexcept {
-    return ReducedScalarTraits<Scalar>::from_int(1) / ReducedScalarTraits<Scalar>::from_int(2);  // 0.5 mm
+    return ReducedScalarTraits<Scalar>::from_int(1) /
+           ReducedScalarTraits<Scalar>::from_int(2);  // 0.5 mm
 }
 
 /// A step that moves the depth by at most this much holds it still [mm] (2 mm/s at 200 Hz).
 template <typename Scalar>
 Scalar still_step_mm() noexcept {
-    return ReducedScalarTraits<Scalar>::from_int(1) / ReducedScalarTraits<Scalar>::from_int(100);  // 0.01 mm
+    return ReducedScalarTraits<Scalar>::from_int(1) /
+           ReducedScalarTraits<Scalar>::from_int(100);  // 0.01 mm
 }
 
 /// A hold counts (for the hold runs and for setting the direction on the next move) from this
@@ -241,8 +246,8 @@ Scalar lerp(Scalar a, Scalar b, Scalar weight) noexcept {
 /// Last knot's key of a segment.
 template <typename Scalar>
 Scalar segment_end_mm(const ReducedSegment<Scalar>& segment) noexcept {
-    return segment.key_start +
-           segment.key_step * ReducedScalarTraits<Scalar>::from_int(static_cast<int>(segment.knots - 1U));
+    return segment.key_start + segment.key_step * ReducedScalarTraits<Scalar>::from_int(
+                                                      static_cast<int>(segment.knots - 1U));
 }
 
 /// Interval index and weight of x in [0, intervals] (clamped).
@@ -260,9 +265,9 @@ std::size_t interval_of(Scalar x, std::size_t intervals, Scalar& weight) noexcep
 /// One step at insertion depth `depth_mm` (validated by the caller), `period_s` after the last
 /// one.  Fixed work: K stations, `gauss_seidel.max_sweeps` sweeps when gauss_seidel.mode is fixed.
 template <typename Scalar, std::size_t Stations, typename Tables>
-ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar depth_mm, Scalar period_s,
-                                                 ReducedState<Scalar, Stations>& state,
-                                                 const contact::GaussSeidelSettings<Scalar>& gauss_seidel) noexcept {
+ReducedStepReport<Scalar, Stations> reduced_step(
+    const Tables& tables, Scalar depth_mm, Scalar period_s, ReducedState<Scalar, Stations>& state,
+    const contact::GaussSeidelSettings<Scalar>& gauss_seidel) noexcept {
     using T = contact::ContactScalarTraits<Scalar>;
     using R = ReducedScalarTraits<Scalar>;
     const ReducedModelHeader<Scalar>& head = tables.header();
@@ -273,7 +278,8 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     // still_step holds it; the hold time counts consecutive such steps. The direction is
     // latched: it reverses once the depth has gone back by the hysteresis from its extreme since
     // the last turn, and the first move after a hold (>= kMinHoldSteps) sets it at once.
-    const bool still = state.started && !(T::abs(depth_mm - state.last_depth_mm) > still_step_mm<Scalar>());
+    const bool still =
+        state.started && !(T::abs(depth_mm - state.last_depth_mm) > still_step_mm<Scalar>());
     if (!state.started) {
         state.direction = 1;
         state.turn_depth_mm = depth_mm;
@@ -281,13 +287,15 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         state.direction = depth_mm < state.last_depth_mm ? -1 : 1;
         state.turn_depth_mm = depth_mm;
     } else if (state.direction > 0) {
-        if (depth_mm > state.turn_depth_mm) state.turn_depth_mm = depth_mm;
+        if (depth_mm > state.turn_depth_mm)
+            state.turn_depth_mm = depth_mm;
         else if (depth_mm < state.turn_depth_mm - reverse_hysteresis_mm<Scalar>()) {
             state.direction = -1;
             state.turn_depth_mm = depth_mm;
         }
     } else {
-        if (depth_mm < state.turn_depth_mm) state.turn_depth_mm = depth_mm;
+        if (depth_mm < state.turn_depth_mm)
+            state.turn_depth_mm = depth_mm;
         else if (depth_mm > state.turn_depth_mm + reverse_hysteresis_mm<Scalar>()) {
             state.direction = 1;
             state.turn_depth_mm = depth_mm;
@@ -305,7 +313,8 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     // direction whose depths hold the depth; else segment 0 (trained advancing over the model's
     // whole depth range).
     std::size_t segment_index = 0;
-    const std::size_t segment_count = head.segment_count <= kMaxReducedSegments ? head.segment_count : kMaxReducedSegments;
+    const std::size_t segment_count =
+        head.segment_count <= kMaxReducedSegments ? head.segment_count : kMaxReducedSegments;
     bool holding = false;
     for (std::size_t i = 1; i < segment_count; ++i) {  // bound: kMaxReducedSegments
         const ReducedSegment<Scalar>& candidate = head.segments[i];
@@ -315,7 +324,8 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
                 segment_index = i;
                 holding = true;
             }
-        } else if (!holding && candidate.direction == state.direction && !(depth_mm < candidate.key_start) &&
+        } else if (!holding && candidate.direction == state.direction &&
+                   !(depth_mm < candidate.key_start) &&
                    !(depth_mm > detail::segment_end_mm(candidate))) {
             segment_index = i;
         }
@@ -344,9 +354,9 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     const std::size_t knot = segment.first_knot + cell;
     const std::size_t next = knot + 1U;
     Scalar compliance_weight{};
-    const std::size_t compliance_cell = detail::interval_of(
-        cells / R::from_int(static_cast<int>(head.compliance_every)), (segment.knots - 1U) / head.compliance_every,
-        compliance_weight);
+    const std::size_t compliance_cell =
+        detail::interval_of(cells / R::from_int(static_cast<int>(head.compliance_every)),
+                            (segment.knots - 1U) / head.compliance_every, compliance_weight);
     const std::size_t record = segment.first_compliance + compliance_cell;
 
     // Stations inside the body: station j at j * spacing from the tip is inside once the depth
@@ -361,24 +371,29 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
     std::array<Scalar, Stations> gap{};
     for (std::size_t j = 0; j < active; ++j) {  // bound: Stations
         const std::size_t base = j * kStationValueCount;
-        path[j] = detail::lerp(tables.value(knot, base + kStationPath), tables.value(next, base + kStationPath), weight);
-        gap[j] = detail::lerp(tables.value(knot, base + kStationGap), tables.value(next, base + kStationGap), weight);
+        path[j] = detail::lerp(tables.value(knot, base + kStationPath),
+                               tables.value(next, base + kStationPath), weight);
+        gap[j] = detail::lerp(tables.value(knot, base + kStationGap),
+                              tables.value(next, base + kStationGap), weight);
         for (std::size_t c = 0; c < 3U; ++c) {
-            state.reference_force_N[j][c] = detail::lerp(tables.value(knot, base + kStationForceN + c),
-                                                         tables.value(next, base + kStationForceN + c), weight);
+            state.reference_force_N[j][c] =
+                detail::lerp(tables.value(knot, base + kStationForceN + c),
+                             tables.value(next, base + kStationForceN + c), weight);
         }
     }
     const std::size_t tip_base = k_stations * kStationValueCount;
     for (std::size_t c = 0; c < 3U; ++c) {
-        state.tip_position_mm[c] = detail::lerp(tables.value(knot, tip_base + c), tables.value(next, tip_base + c), weight);
+        state.tip_position_mm[c] = detail::lerp(tables.value(knot, tip_base + c),
+                                                tables.value(next, tip_base + c), weight);
     }
     auto& problem = state.problem;
     problem.contact_count = active;
-    problem.block_diagonal = true;  // the off-diagonal blocks are never read
+    problem.block_diagonal = true;              // the off-diagonal blocks are never read
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations blocks of 9
         const std::size_t base = a * kComplianceValueCount;
         const auto compliance = [&](std::size_t v) {
-            return detail::lerp(tables.compliance(record, base + v), tables.compliance(record + 1U, base + v), compliance_weight);
+            return detail::lerp(tables.compliance(record, base + v),
+                                tables.compliance(record + 1U, base + v), compliance_weight);
         };
         auto& block = problem.block(a, a);
         block = {};
@@ -419,7 +434,8 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         // A stretch whose resultant pulls (f_n < 0: its nodes touch opposite walls) or lies far
         // outside any cone: the station follows the training (see "Passive stations").
         state.passive[a] = f_ref[0] < T::zero() || tangential > max_ratio * f_ref[0];
-        const Scalar ratio = f_ref[0] > T::zero() && !state.passive[a] ? tangential / f_ref[0] : T::zero();
+        const Scalar ratio =
+            f_ref[0] > T::zero() && !state.passive[a] ? tangential / f_ref[0] : T::zero();
         const Scalar stuck_mu = stuck_margin<Scalar>() * ratio;
         problem.friction[a] = slid ? ratio : (stuck_mu < head.friction ? head.friction : stuck_mu);
 
@@ -440,13 +456,13 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         contact::ContactVec3<Scalar> w_f{};
         const auto& block = problem.block(a, a);
         for (std::size_t i = 0; i < 3U; ++i) {
-            for (std::size_t j = 0; j < 3U; ++j) w_f[i] = w_f[i] + block[3U * i + j] * f_ref[j];
+            for (std::size_t j = 0; j < 3U; ++j)
+                w_f[i] = w_f[i] + block[3U * i + j] * f_ref[j];
         }
         // A station whose training force presses on the wall is in contact (its interpolated
         // gap can be > 0 next to a knot where the stretch pulled or stood off).
         const Scalar gap_mm = f_ref[0] > T::zero() ? T::zero() : gap[a];
-        problem.free_displacement[a] = {gap_mm - w_f[0],
-                                        slip_t - state.elastic_mm[a][1] - w_f[1],
+        problem.free_displacement[a] = {gap_mm - w_f[0], slip_t - state.elastic_mm[a][1] - w_f[1],
                                         slip_s - state.elastic_mm[a][2] - w_f[2]};
     }
 
@@ -458,13 +474,15 @@ ReducedStepReport<Scalar, Stations> reduced_step(const Tables& tables, Scalar de
         const auto& block = problem.block(a, a);
         for (std::size_t i = 0; i < 3U; ++i) {
             for (std::size_t j = 0; j < 3U; ++j) {
-                u[i] = u[i] + block[3U * i + j] * (state.force_N[a][j] - state.reference_force_N[a][j]);
+                u[i] = u[i] +
+                       block[3U * i + j] * (state.force_N[a][j] - state.reference_force_N[a][j]);
             }
         }
         if (state.passive[a]) {
             state.force_N[a] = state.reference_force_N[a];
             u = contact::ContactVec3<Scalar>{};
-            report.contact.states[a] = training_slid[a] ? contact::ContactState::slipping : contact::ContactState::sticking;
+            report.contact.states[a] = training_slid[a] ? contact::ContactState::slipping
+                                                        : contact::ContactState::sticking;
         }
         state.elastic_mm[a] = u;
         state.reference_path_mm[a] = path[a];

@@ -39,31 +39,35 @@ std::uint32_t reduced_tables_checksum(const ReducedTablesQ16& tables) noexcept {
         hash = fnv_word(hash, static_cast<std::uint32_t>(s.first_knot));
         hash = fnv_word(hash, static_cast<std::uint32_t>(s.first_compliance));
     }
-    for (std::size_t i = 0; i < tables.knot_value_count; ++i) {  // bound: knot_value_count (flash size)
+    for (std::size_t i = 0; i < tables.knot_value_count;
+         ++i) {  // bound: knot_value_count (flash size)
         hash = fnv_word(hash, static_cast<std::uint32_t>(tables.knot_values[i]));
     }
-    for (std::size_t i = 0; i < tables.compliance_value_count; ++i) {  // bound: compliance_value_count
+    for (std::size_t i = 0; i < tables.compliance_value_count;
+         ++i) {  // bound: compliance_value_count
         hash = fnv_word(hash, static_cast<std::uint32_t>(tables.compliance_values[i]));
     }
     return hash;
 }
 
-ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables, std::size_t station_capacity) noexcept {
+ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables,
+                                        std::size_t station_capacity) noexcept {
     if (tables == nullptr || tables->knot_values == nullptr || tables->knot_value_count == 0U ||
         tables->compliance_values == nullptr || tables->compliance_value_count == 0U) {
         return ReducedTablesFault::missing;
     }
     const ReducedModelHeader<Q16_16>& h = tables->head;
     if (h.stations < 1U || h.stations > station_capacity || h.segment_count < 1U ||
-        h.segment_count > kMaxReducedSegments || h.compliance_every < 1U || h.compliance_every > 1000U) {
+        h.segment_count > kMaxReducedSegments || h.compliance_every < 1U ||
+        h.compliance_every > 1000U) {
         return ReducedTablesFault::bad_shape;
     }
     std::size_t knots = 0;
     std::size_t records = 0;
     for (std::size_t i = 0; i < h.segment_count; ++i) {  // bound: kMaxReducedSegments
         const ReducedSegment<Q16_16>& s = h.segments[i];
-        if (s.knots < 2U || s.knots > 100000U || (s.knots - 1U) % h.compliance_every != 0U || s.first_knot != knots ||
-            s.first_compliance != records) {
+        if (s.knots < 2U || s.knots > 100000U || (s.knots - 1U) % h.compliance_every != 0U ||
+            s.first_knot != knots || s.first_compliance != records) {
             return ReducedTablesFault::bad_shape;
         }
         knots += s.knots;
@@ -73,8 +77,8 @@ ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables, std::siz
         tables->compliance_value_count != records * reduced_compliance_size(h.stations)) {
         return ReducedTablesFault::bad_shape;
     }
-    if (h.station_spacing_mm <= Q16_16{} || h.friction <= Q16_16{} || h.segments[0].direction != 1 ||
-        h.segments[0].kind != kSegmentTravel) {
+    if (h.station_spacing_mm <= Q16_16{} || h.friction <= Q16_16{} ||
+        h.segments[0].direction != 1 || h.segments[0].kind != kSegmentTravel) {
         return ReducedTablesFault::bad_grid;
     }
     for (std::size_t i = 0; i < h.segment_count; ++i) {  // bound: kMaxReducedSegments
@@ -87,11 +91,13 @@ ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables, std::siz
             return ReducedTablesFault::bad_grid;
         }
         // The last knot's key must be representable (no saturation in reduced_step).
-        const std::int64_t end_raw = std::int64_t{s.key_start.raw()} +
-                                     std::int64_t{s.key_step.raw()} * static_cast<std::int64_t>(s.knots - 1U);
+        const std::int64_t end_raw =
+            std::int64_t{s.key_start.raw()} +
+            std::int64_t{s.key_step.raw()} * static_cast<std::int64_t>(s.knots - 1U);
         if (end_raw > std::int64_t{Q16_16::max().raw()}) return ReducedTablesFault::bad_grid;
     }
-    if (reduced_tables_checksum(*tables) != tables->checksum) return ReducedTablesFault::checksum_mismatch;
+    if (reduced_tables_checksum(*tables) != tables->checksum)
+        return ReducedTablesFault::checksum_mismatch;
     return ReducedTablesFault::none;
 }
 

@@ -29,18 +29,20 @@ template <>
 struct ReducedScalarTraits<Q16_16> {
     static Q16_16 from_int(int value) noexcept { return Q16_16::from_int(value); }
     /// floor(x): the integer part of the raw value (arithmetic shift).
-    static int floor_int(Q16_16 x) noexcept { return static_cast<int>(x.raw() >> Q16_16::fraction_bits); }
+    static int floor_int(Q16_16 x) noexcept {
+        return static_cast<int>(x.raw() >> Q16_16::fraction_bits);
+    }
 };
 
 /// Generated reduced-model tables (Tables interface of reduced_step).
 struct ReducedTablesQ16 {
     ReducedModelHeader<Q16_16> head{};
-    const std::int32_t* knot_values{nullptr};        ///< knot records, raw Q16.16
+    const std::int32_t* knot_values{nullptr};  ///< knot records, raw Q16.16
     std::size_t knot_value_count{0};
     const std::int32_t* compliance_values{nullptr};  ///< compliance records, raw Q16.16
     std::size_t compliance_value_count{0};
-    std::uint32_t checksum{0};                       ///< reduced_tables_checksum(*this) when intact
-    const char* source{""};                          ///< training and generator, for reports
+    std::uint32_t checksum{0};  ///< reduced_tables_checksum(*this) when intact
+    const char* source{""};     ///< training and generator, for reports
 
     [[nodiscard]] const ReducedModelHeader<Q16_16>& header() const noexcept { return head; }
     /// Unchecked: indices come from reduced_step, bounded by the header validated at init.
@@ -48,7 +50,8 @@ struct ReducedTablesQ16 {
         return Q16_16::from_raw(knot_values[knot * reduced_knot_size(head.stations) + index]);
     }
     [[nodiscard]] Q16_16 compliance(std::size_t record, std::size_t index) const noexcept {
-        return Q16_16::from_raw(compliance_values[record * reduced_compliance_size(head.stations) + index]);
+        return Q16_16::from_raw(
+            compliance_values[record * reduced_compliance_size(head.stations) + index]);
     }
 };
 

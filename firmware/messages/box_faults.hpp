@@ -55,8 +55,8 @@ enum TrackerFault : std::uint8_t {
     static_assert(kSame == (kTrackerFaultStale | kTrackerFaultOutOfRange |
                             kTrackerFaultQuaternionNorm | kTrackerFaultDeviceTime |
                             kTrackerFaultUnknownSensor | kTrackerFaultDeviceStatus));
-    constexpr std::uint32_t kFraming = kEmFaultBadChecksum | kEmFaultBadLength |
-                                       kEmFaultUnknownType | kEmFaultBufferOverflow;
+    constexpr std::uint32_t kFraming =
+        kEmFaultBadChecksum | kEmFaultBadLength | kEmFaultUnknownType | kEmFaultBufferOverflow;
     constexpr std::uint32_t kLink = kEmFaultSerial | kEmFaultQueueOverflow;
     std::uint32_t faults = em_flags & kSame;
     if ((em_flags & kFraming) != 0U) faults |= kTrackerFaultFraming;

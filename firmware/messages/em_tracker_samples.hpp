@@ -42,8 +42,8 @@ inline constexpr std::uint8_t kEmAllSources = 0x1FU;
 /// own checks) and of the driver (EmTrackerDriver::fault_flags(): stale now, plus every event
 /// since the last take_fault_flags()).  messages/box_faults.hpp maps them to BoxStatus.
 enum EmTrackerFault : std::uint32_t {
-    kEmFaultStale = 1U << 0U,           ///< a monitored source has no valid sample within the timeout
-    kEmFaultOutOfRange = 1U << 1U,      ///< position or force component beyond its limit
+    kEmFaultStale = 1U << 0U,       ///< a monitored source has no valid sample within the timeout
+    kEmFaultOutOfRange = 1U << 1U,  ///< position or force component beyond its limit
     kEmFaultQuaternionNorm = 1U << 2U,  ///< orientation is not a unit quaternion (within tolerance)
     kEmFaultTimestamp = 1U << 3U,       ///< device time did not increase for this source
     kEmFaultUnknownSensor = 1U << 4U,   ///< pose of a sensor id > 3
@@ -63,24 +63,27 @@ inline constexpr std::uint32_t kEmSampleFaults = kEmFaultOutOfRange | kEmFaultQu
                                                  kEmFaultDeviceStatus;
 
 struct EmPoseSample {
-    std::uint8_t sensor_id{0};             ///< wire id; an EmSensor when < kEmSensorCount
-    std::array<Q16_16, 3> position_mm{};   ///< x, y, z, tracker frame
-    std::array<Q16_16, 4> orientation{};   ///< unit quaternion w, x, y, z (dimensionless)
-    std::uint32_t device_time_us{0};       ///< tracker clock (wraps at 2^32 µs)
-    std::uint64_t receive_time_us{0};      ///< box clock (hal::MonotonicClock) when read
-    std::uint8_t device_status{0};         ///< the wire's status byte
-    std::uint32_t fault_flags{0};          ///< kEmSampleFaults bits; 0 = valid
+    std::uint8_t sensor_id{0};            ///< wire id; an EmSensor when < kEmSensorCount
+    std::array<Q16_16, 3> position_mm{};  ///< x, y, z, tracker frame
+    std::array<Q16_16, 4> orientation{};  ///< unit quaternion w, x, y, z (dimensionless)
+    std::uint32_t device_time_us{0};      ///< tracker clock (wraps at 2^32 µs)
+    std::uint64_t receive_time_us{0};     ///< box clock (hal::MonotonicClock) when read
+    std::uint8_t device_status{0};        ///< the wire's status byte
+    std::uint32_t fault_flags{0};         ///< kEmSampleFaults bits; 0 = valid
 };
 
 struct TipForceSample {
-    std::array<Q16_16, 3> force_N{};       ///< x, y across the tip, z along the scope axis
+    std::array<Q16_16, 3> force_N{};  ///< x, y across the tip, z along the scope axis
     std::uint32_t device_time_us{0};
     std::uint64_t receive_time_us{0};
     std::uint8_t device_status{0};
     std::uint32_t fault_flags{0};
 };
 
-enum class EmTrackerSampleKind : std::uint8_t { pose, tip_force };
+enum class EmTrackerSampleKind : std::uint8_t {
+    pose,
+    tip_force
+};
 
 /// One entry of the driver's sample queue: `pose` or `tip_force`, as `kind` says.
 struct EmTrackerSample {

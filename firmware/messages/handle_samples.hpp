@@ -18,15 +18,15 @@ using fixed_point::Q16_16;
 
 /// One valid frame of the force/torque cell.
 struct ForceTorqueSample {
-    Q16_16 force_N{};                  ///< axial force at the handle, + pushing in
-    Q16_16 torque_Nmm{};               ///< torque about the shaft axis
+    Q16_16 force_N{};     ///< axial force at the handle, + pushing in
+    Q16_16 torque_Nmm{};  ///< torque about the shaft axis
     std::uint64_t receive_time_us{0};
 };
 
 /// One valid frame of the insertion/roll encoder.
 struct InsertionRollSample {
-    Q16_16 insertion_mm{};             ///< scope length past the anus
-    Q16_16 roll_rad{};                 ///< shaft roll, unwrapped
+    Q16_16 insertion_mm{};  ///< scope length past the anus
+    Q16_16 roll_rad{};      ///< shaft roll, unwrapped
     std::uint64_t receive_time_us{0};
 };
 

@@ -97,9 +97,9 @@ public:
     static constexpr std::size_t capacity = WindowCapacity;
 
     struct Config {
-        std::uint16_t window_steps = 50;    ///< N: 0.25 s at 5 ms; 1..WindowCapacity
+        std::uint16_t window_steps = 50;     ///< N: 0.25 s at 5 ms; 1..WindowCapacity
         std::uint16_t advancing_steps = 10;  ///< short window of handle_advancing: 50 ms
-        Q16_16 min_handle_advance_mm = Q16_16::from_int(2);  ///< over the window; below: undefined
+        Q16_16 min_handle_advance_mm = Q16_16::from_int(2);   ///< over the window; below: undefined
         Q16_16 min_advancing_mm = Q16_16::from_ratio(2, 5);   ///< 0.4 mm over advancing_steps
         Q16_16 max_abs_position_mm = Q16_16::from_int(5000);  ///< beyond: absurd input
     };
@@ -246,8 +246,8 @@ private:
     Config config_{clamped_default()};
     std::array<Q16_16, kSlots> tip_{};
     std::array<Q16_16, kSlots> handle_{};
-    std::uint16_t head_{0};    ///< slot of the newest sample
-    std::uint16_t count_{0};   ///< samples stored (capped at kSlots)
+    std::uint16_t head_{0};   ///< slot of the newest sample
+    std::uint16_t count_{0};  ///< samples stored (capped at kSlots)
     std::uint16_t steps_since_substitute_{kSlots};
     Q16_16 last_tip_{};
     Q16_16 last_handle_{};

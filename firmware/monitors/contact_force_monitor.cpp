@@ -27,10 +27,10 @@ bool ContactForceMonitor::init(const Config& config) noexcept {
 
 void ContactForceMonitor::configure(const Config& config) noexcept {
     config_ = config;
-    warning_ = Detector{config.warning_N, mul_sat(config.warning_N, config.clear_fraction), 0U,
-                        false};
-    critical_ = Detector{config.critical_N, mul_sat(config.critical_N, config.clear_fraction), 0U,
-                         false};
+    warning_ =
+        Detector{config.warning_N, mul_sat(config.warning_N, config.clear_fraction), 0U, false};
+    critical_ =
+        Detector{config.critical_N, mul_sat(config.critical_N, config.clear_fraction), 0U, false};
 }
 
 void ContactForceMonitor::Detector::update(Q16_16 force, std::uint16_t persistence_steps) noexcept {

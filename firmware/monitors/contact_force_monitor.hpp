@@ -77,7 +77,11 @@ namespace scopekin::monitors {
 
 using fixed_point::Q16_16;
 
-enum class ContactForceLevel : std::uint8_t { normal, warning, critical };
+enum class ContactForceLevel : std::uint8_t {
+    normal,
+    warning,
+    critical
+};
 
 class ContactForceMonitor {
 public:
@@ -85,10 +89,10 @@ public:
     static constexpr std::uint16_t kMaxPersistenceSteps = 200;
 
     struct Config {
-        Q16_16 warning_N = Q16_16::from_int(10);          ///< see "Default thresholds"
-        Q16_16 critical_N = Q16_16::from_int(14);         ///< Johnson et al. 2019: 14.1 N
+        Q16_16 warning_N = Q16_16::from_int(10);            ///< see "Default thresholds"
+        Q16_16 critical_N = Q16_16::from_int(14);           ///< Johnson et al. 2019: 14.1 N
         Q16_16 clear_fraction = Q16_16::from_ratio(9, 10);  ///< clear below 90 % of a threshold
-        std::uint16_t persistence_steps = 1;              ///< consecutive steps >= threshold
+        std::uint16_t persistence_steps = 1;                ///< consecutive steps >= threshold
         Q16_16 max_valid_force_N = Q16_16::from_int(1000);  ///< above: input fault
     };
 

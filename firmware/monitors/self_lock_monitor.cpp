@@ -24,8 +24,8 @@ bool valid(const StickCriterion& criterion) noexcept {
     return criterion.stick_ratio > zero && criterion.stick_ratio <= Q16_16::from_int(1) &&
            criterion.min_normal_force_N >= zero &&
            criterion.min_normal_force_N < criterion.max_valid_force_N &&
-           criterion.max_valid_force_N < Q16_16::from_int(32767) &&
-           criterion.max_valid_mu > zero && criterion.max_valid_mu <= Q16_16::from_int(2);
+           criterion.max_valid_force_N < Q16_16::from_int(32767) && criterion.max_valid_mu > zero &&
+           criterion.max_valid_mu <= Q16_16::from_int(2);
 }
 
 StickState classify_stick(Q16_16 normal_N, Q16_16 tangential_N, Q16_16 mu,
@@ -48,10 +48,9 @@ StickState classify_stick(Q16_16 normal_N, Q16_16 tangential_N, Q16_16 mu,
 bool SelfLockMonitor::valid(const Config& config) noexcept {
     const Q16_16 zero{};
     return config.min_sticking_stations >= 1U &&
-           config.min_sticking_stations <= config.max_distal_stations &&
-           config.on_steps >= 1U && config.on_steps <= kMaxHysteresisSteps &&
-           config.off_steps >= 1U && config.off_steps <= kMaxHysteresisSteps &&
-           config.confirm_efficiency > zero &&
+           config.min_sticking_stations <= config.max_distal_stations && config.on_steps >= 1U &&
+           config.on_steps <= kMaxHysteresisSteps && config.off_steps >= 1U &&
+           config.off_steps <= kMaxHysteresisSteps && config.confirm_efficiency > zero &&
            config.confirm_efficiency <= config.clear_efficiency &&
            config.clear_efficiency <= Q16_16::from_int(2);
 }
@@ -101,8 +100,8 @@ SelfLockMonitor::Outputs SelfLockMonitor::step(const Inputs& inputs) noexcept {
             off_count_ = 0U;
         }
     }
-    out.confirmed = out.alarm && inputs.efficiency_defined &&
-                    inputs.efficiency < config_.confirm_efficiency;
+    out.confirmed =
+        out.alarm && inputs.efficiency_defined && inputs.efficiency < config_.confirm_efficiency;
     last_ = out;
     return out;
 }

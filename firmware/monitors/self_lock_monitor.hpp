@@ -120,17 +120,22 @@ using fixed_point::Q16_16;
 // ---- stick test for one contact ----------------------------------------------------------
 
 struct StickCriterion {
-    Q16_16 stick_ratio = Q16_16::from_ratio(95, 100);      ///< stick iff |f_T| < ratio*mu*f_n
+    Q16_16 stick_ratio = Q16_16::from_ratio(95, 100);       ///< stick iff |f_T| < ratio*mu*f_n
     Q16_16 min_normal_force_N = Q16_16::from_ratio(1, 20);  ///< 0.05 N; below: no contact
-    Q16_16 max_valid_force_N = Q16_16::from_int(1000);     ///< above: invalid input
-    Q16_16 max_valid_mu = Q16_16::from_int(2);             ///< above (or mu < 0): invalid
+    Q16_16 max_valid_force_N = Q16_16::from_int(1000);      ///< above: invalid input
+    Q16_16 max_valid_mu = Q16_16::from_int(2);              ///< above (or mu < 0): invalid
 };
 
 /// true if 0 < stick_ratio <= 1, 0 <= min_normal_force_N < max_valid_force_N < 32767 N,
 /// 0 < max_valid_mu <= 2.
 [[nodiscard]] bool valid(const StickCriterion& criterion) noexcept;
 
-enum class StickState : std::uint8_t { no_contact, slipping, sticking, invalid };
+enum class StickState : std::uint8_t {
+    no_contact,
+    slipping,
+    sticking,
+    invalid
+};
 
 /// Stick test of one contact (see "Physics").  `tangential_N` = ||[f_t f_s]|| (>= 0).
 /// An invalid `criterion` gives StickState::invalid.
@@ -183,23 +188,23 @@ public:
         std::uint8_t max_distal_stations = 3;    ///< inputs above this are absurd
         std::uint16_t on_steps = 20;             ///< T_on  = 0.1 s at 5 ms
         std::uint16_t off_steps = 100;           ///< T_off = 0.5 s at 5 ms
-        Q16_16 confirm_efficiency = Q16_16::from_ratio(1, 2);   ///< 0.5
-        Q16_16 clear_efficiency = Q16_16::from_ratio(7, 10);    ///< 0.7
+        Q16_16 confirm_efficiency = Q16_16::from_ratio(1, 2);  ///< 0.5
+        Q16_16 clear_efficiency = Q16_16::from_ratio(7, 10);   ///< 0.7
     };
 
     struct Inputs {
-        std::uint8_t distal_sticking{0};  ///< distal stations in stick this step
-        bool handle_advancing{false};     ///< AdvanceEfficiency::Outputs::handle_advancing
+        std::uint8_t distal_sticking{0};         ///< distal stations in stick this step
+        bool handle_advancing{false};            ///< AdvanceEfficiency::Outputs::handle_advancing
         Q16_16 efficiency{Q16_16::from_int(1)};  ///< AdvanceEfficiency (held when undefined)
         bool efficiency_defined{false};
     };
 
     struct Outputs {
         bool alarm{false};
-        bool confirmed{false};            ///< alarm and efficiency (defined) < confirm_efficiency
-        bool condition{false};            ///< C this step
+        bool confirmed{false};             ///< alarm and efficiency (defined) < confirm_efficiency
+        bool condition{false};             ///< C this step
         std::uint16_t condition_steps{0};  ///< consecutive steps with C (capped at on_steps)
-        bool input_fault{false};          ///< absurd inputs: everything held from last step
+        bool input_fault{false};           ///< absurd inputs: everything held from last step
     };
 
     SelfLockMonitor() noexcept = default;

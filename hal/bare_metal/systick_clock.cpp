@@ -20,8 +20,8 @@ SysTickClock::SysTickClock(std::uint32_t cpu_clock_hz)
     : ticks_per_us_(cpu_clock_hz / 1'000'000U == 0U ? 1U : cpu_clock_hz / 1'000'000U) {
     reg(kSystCsr) = 0U;
     reg(kSystRvr) = kCountMask;
-    reg(kSystCvr) = 0U;                              // reload on the next edge
-    reg(kSystCsr) = kCsrClkSourceCpu | kCsrEnable;   // no interrupt: polled
+    reg(kSystCvr) = 0U;                             // reload on the next edge
+    reg(kSystCsr) = kCsrClkSourceCpu | kCsrEnable;  // no interrupt: polled
     last_count_ = kCountMask;
 }
 

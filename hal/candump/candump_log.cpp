@@ -14,7 +14,9 @@ int hex_value(char c) {
     return -1;
 }
 
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+bool is_blank(char c) {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n';
+}
 
 /// Reads `count` decimal digits at `text[pos]` into `value` (count <= 19: no overflow at 10^19 -
 /// we allow at most 12 here).
@@ -47,11 +49,18 @@ const char* describe(CandumpParse result) {
     switch (result) {
         case CandumpParse::ok: return "ok";
         case CandumpParse::blank: return "blank line";
-        case CandumpParse::bad_timestamp: return "bad timestamp: expected (seconds.microseconds) with 6 digits of microseconds";
-        case CandumpParse::bad_interface: return "bad interface name: expected 1 to 15 characters after the timestamp";
-        case CandumpParse::bad_identifier: return "bad identifier: expected 3 hex digits (11-bit) or 8 hex digits (29-bit / error frame) before '#'";
-        case CandumpParse::bad_data: return "bad data: expected up to 8 bytes as pairs of hex digits after '#', or R for a remote frame";
-        case CandumpParse::fd_unsupported: return "CAN FD frame ('##'): not supported, the box uses classic CAN";
+        case CandumpParse::bad_timestamp:
+            return "bad timestamp: expected (seconds.microseconds) with 6 digits of microseconds";
+        case CandumpParse::bad_interface:
+            return "bad interface name: expected 1 to 15 characters after the timestamp";
+        case CandumpParse::bad_identifier:
+            return "bad identifier: expected 3 hex digits (11-bit) or 8 hex digits (29-bit / error "
+                   "frame) before '#'";
+        case CandumpParse::bad_data:
+            return "bad data: expected up to 8 bytes as pairs of hex digits after '#', or R for a "
+                   "remote frame";
+        case CandumpParse::fd_unsupported:
+            return "CAN FD frame ('##'): not supported, the box uses classic CAN";
         case CandumpParse::trailing_garbage: return "unexpected text after the frame";
     }
     return "unknown";
@@ -59,7 +68,8 @@ const char* describe(CandumpParse result) {
 
 CandumpParse parse_candump_line(std::string_view line, CandumpRecord& record) {
     std::size_t pos = 0;
-    while (pos < line.size() && is_blank(line[pos])) ++pos;  // bound: line.size()
+    while (pos < line.size() && is_blank(line[pos]))
+        ++pos;  // bound: line.size()
     if (pos == line.size()) {
         return CandumpParse::blank;
     }
@@ -74,14 +84,16 @@ CandumpParse parse_candump_line(std::string_view line, CandumpRecord& record) {
     if (!read_decimal(line, pos, 12, seconds, digits)) return CandumpParse::bad_timestamp;
     if (pos >= line.size() || line[pos] != '.') return CandumpParse::bad_timestamp;
     ++pos;
-    if (!read_decimal(line, pos, 6, micros, digits) || digits != 6) return CandumpParse::bad_timestamp;
+    if (!read_decimal(line, pos, 6, micros, digits) || digits != 6)
+        return CandumpParse::bad_timestamp;
     if (pos >= line.size() || line[pos] != ')') return CandumpParse::bad_timestamp;
     ++pos;
     parsed.timestamp_us = seconds * 1000000U + micros;
 
     // interface
     if (pos >= line.size() || line[pos] != ' ') return CandumpParse::bad_interface;
-    while (pos < line.size() && line[pos] == ' ') ++pos;  // bound: line.size()
+    while (pos < line.size() && line[pos] == ' ')
+        ++pos;  // bound: line.size()
     std::size_t name_length = 0;
     while (pos < line.size() && !is_blank(line[pos])) {  // bound: line.size()
         if (name_length == kCandumpInterfaceCapacity - 1U || line[pos] == '\0') {
@@ -90,7 +102,8 @@ CandumpParse parse_candump_line(std::string_view line, CandumpRecord& record) {
         parsed.interface[name_length++] = line[pos++];
     }
     if (name_length == 0) return CandumpParse::bad_interface;
-    while (pos < line.size() && line[pos] == ' ') ++pos;  // bound: line.size()
+    while (pos < line.size() && line[pos] == ' ')
+        ++pos;  // bound: line.size()
 
     // identifier
     const std::size_t id_start = pos;
@@ -145,7 +158,8 @@ CandumpParse parse_candump_line(std::string_view line, CandumpRecord& record) {
         }
         parsed.frame.length = length;
     }
-    while (pos < line.size() && is_blank(line[pos])) ++pos;  // bound: line.size()
+    while (pos < line.size() && is_blank(line[pos]))
+        ++pos;  // bound: line.size()
     if (pos != line.size()) return CandumpParse::trailing_garbage;
     record = parsed;
     return CandumpParse::ok;
@@ -168,7 +182,8 @@ std::size_t format_candump_line(const CandumpRecord& record, std::span<char> out
         reversed[n++] = static_cast<char>('0' + seconds % 10U);
         seconds /= 10U;
     } while (seconds != 0U && n < reversed.size());
-    while (n > 0) out[pos++] = reversed[--n];  // bound: 20
+    while (n > 0)
+        out[pos++] = reversed[--n];  // bound: 20
     out[pos++] = '.';
     std::uint32_t divisor = 100000;
     for (int k = 0; k < 6; ++k) {  // bound: 6

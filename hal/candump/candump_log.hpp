@@ -29,13 +29,13 @@ inline constexpr std::size_t kCandumpLineCapacity = 96;
 
 struct CandumpRecord {
     std::uint64_t timestamp_us{0};
-    std::array<char, kCandumpInterfaceCapacity> interface{};  ///< NUL-terminated
+    std::array<char, kCandumpInterfaceCapacity> interface {};  ///< NUL-terminated
     CanFrame frame{};
 };
 
 enum class CandumpParse : std::uint8_t {
     ok,
-    blank,             ///< empty line (or only blanks): nothing to replay, not an error
+    blank,  ///< empty line (or only blanks): nothing to replay, not an error
     bad_timestamp,
     bad_interface,
     bad_identifier,

@@ -14,7 +14,9 @@ std::uint64_t read_us(clockid_t clock) {
 }
 }  // namespace
 
-std::uint64_t LinuxMonotonicClock::now_us() const { return read_us(CLOCK_MONOTONIC); }
+std::uint64_t LinuxMonotonicClock::now_us() const {
+    return read_us(CLOCK_MONOTONIC);
+}
 
 void LinuxMonotonicClock::wait_until_us(std::uint64_t deadline_us) {
     timespec deadline{};
@@ -24,6 +26,8 @@ void LinuxMonotonicClock::wait_until_us(std::uint64_t deadline_us) {
     (void)clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, nullptr);
 }
 
-std::uint64_t realtime_now_us() { return read_us(CLOCK_REALTIME); }
+std::uint64_t realtime_now_us() {
+    return read_us(CLOCK_REALTIME);
+}
 
 }  // namespace scopekin::hal

@@ -13,7 +13,9 @@ namespace {
 constexpr std::uint64_t kFlushEveryUs = 1000000;
 }  // namespace
 
-RecordingCanBus::~RecordingCanBus() { (void)close(); }
+RecordingCanBus::~RecordingCanBus() {
+    (void)close();
+}
 
 bool RecordingCanBus::open(const std::string& path, const std::string& interface,
                            std::string& error) {
@@ -24,8 +26,8 @@ bool RecordingCanBus::open(const std::string& path, const std::string& interface
         return false;
     }
     set_candump_interface(record_, interface);
-    realtime_offset_us_ = static_cast<std::int64_t>(realtime_now_us()) -
-                          static_cast<std::int64_t>(clock_->now_us());
+    realtime_offset_us_ =
+        static_cast<std::int64_t>(realtime_now_us()) - static_cast<std::int64_t>(clock_->now_us());
     last_flush_us_ = clock_->now_us();
     return true;
 }
@@ -46,8 +48,8 @@ void RecordingCanBus::record(const CanFrame& frame, std::uint64_t monotonic_us) 
         return;
     }
     record_.frame = frame;
-    record_.timestamp_us = static_cast<std::uint64_t>(static_cast<std::int64_t>(monotonic_us) +
-                                                      realtime_offset_us_);
+    record_.timestamp_us =
+        static_cast<std::uint64_t>(static_cast<std::int64_t>(monotonic_us) + realtime_offset_us_);
     std::array<char, kCandumpLineCapacity> line{};
     const std::size_t length = format_candump_line(record_, line);
     if (length == 0U || std::fwrite(line.data(), 1, length, file_) != length) {

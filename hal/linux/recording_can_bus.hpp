@@ -36,7 +36,10 @@ public:
 
     CanStatus send(const CanFrame& frame, std::uint32_t timeout_us) override;
     /// Sent frames from now on carry this monotonic time (the period's release time).
-    void set_send_time_us(std::uint64_t monotonic_us) { send_time_us_ = monotonic_us; has_send_time_ = true; }
+    void set_send_time_us(std::uint64_t monotonic_us) {
+        send_time_us_ = monotonic_us;
+        has_send_time_ = true;
+    }
     CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) override;
     [[nodiscard]] CanCounters counters() const override { return bus_->counters(); }
 

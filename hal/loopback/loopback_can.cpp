@@ -44,7 +44,9 @@ CanStatus LoopbackCanEndpoint::receive(ReceivedCanFrame& received, std::uint32_t
     return CanStatus::ok;
 }
 
-CanCounters LoopbackCanEndpoint::counters() const { return counters_; }
+CanCounters LoopbackCanEndpoint::counters() const {
+    return counters_;
+}
 
 void LoopbackCanEndpoint::inject_error(std::uint32_t classes,
                                        const std::array<std::uint8_t, 8>& data) {

@@ -37,7 +37,8 @@ std::size_t LoopbackSerialPort::device_read(std::span<std::uint8_t> buffer) {
     return take(from_box_, buffer);
 }
 
-SerialTransfer LoopbackSerialPort::read(std::span<std::uint8_t> buffer, std::uint32_t /*timeout_us*/) {
+SerialTransfer LoopbackSerialPort::read(std::span<std::uint8_t> buffer,
+                                        std::uint32_t /*timeout_us*/) {
     const std::size_t count = take(to_box_, buffer);
     counters_.bytes_received += static_cast<std::uint32_t>(count);
     return SerialTransfer{count > 0 ? SerialStatus::ok : SerialStatus::timeout, count};

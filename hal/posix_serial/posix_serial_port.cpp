@@ -29,10 +29,9 @@ struct BaudRate {
 
 // The standard termios rates; the ones above 115200 are not POSIX, hence each behind its macro.
 constexpr BaudRate kBaudRates[] = {
-    {50U, B50},         {75U, B75},         {110U, B110},       {134U, B134},
-    {150U, B150},       {200U, B200},       {300U, B300},       {600U, B600},
-    {1200U, B1200},     {1800U, B1800},     {2400U, B2400},     {4800U, B4800},
-    {9600U, B9600},     {19200U, B19200},   {38400U, B38400},
+    {50U, B50},           {75U, B75},     {110U, B110},   {134U, B134},     {150U, B150},
+    {200U, B200},         {300U, B300},   {600U, B600},   {1200U, B1200},   {1800U, B1800},
+    {2400U, B2400},       {4800U, B4800}, {9600U, B9600}, {19200U, B19200}, {38400U, B38400},
 #ifdef B57600
     {57600U, B57600},
 #endif
@@ -128,9 +127,13 @@ __attribute__((format(printf, 2, 3))) void report(std::span<char> error, const c
 
 }  // namespace
 
-std::span<const std::uint32_t> PosixSerialPort::supported_bauds() noexcept { return kBaudValues; }
+std::span<const std::uint32_t> PosixSerialPort::supported_bauds() noexcept {
+    return kBaudValues;
+}
 
-PosixSerialPort::~PosixSerialPort() { close(); }
+PosixSerialPort::~PosixSerialPort() {
+    close();
+}
 
 PosixSerialPort::PosixSerialPort(PosixSerialPort&& other) noexcept
     : SerialPort(other), fd_(other.fd_), baud_bps_(other.baud_bps_), counters_(other.counters_) {
@@ -157,7 +160,8 @@ void PosixSerialPort::close() noexcept {
     baud_bps_ = 0;
 }
 
-bool PosixSerialPort::open(const char* path, std::uint32_t baud_bps, std::span<char> error) noexcept {
+bool PosixSerialPort::open(const char* path, std::uint32_t baud_bps,
+                           std::span<char> error) noexcept {
     close();
     counters_ = {};
     if (path == nullptr || path[0] == '\0') {
@@ -203,9 +207,11 @@ bool PosixSerialPort::open(const char* path, std::uint32_t baud_bps, std::span<c
         return false;
     }
     ::cfmakeraw(&settings);  // 8 bits, no parity, no echo, no canonical mode, no translation
-    settings.c_cflag |= static_cast<tcflag_t>(CLOCAL | CREAD);      // ignore modem lines, receive
-    settings.c_cflag &= static_cast<tcflag_t>(~static_cast<tcflag_t>(CSTOPB | CRTSCTS));  // 1 stop, no RTS/CTS
-    settings.c_iflag &= static_cast<tcflag_t>(~static_cast<tcflag_t>(IXON | IXOFF | IXANY));  // no XON/XOFF
+    settings.c_cflag |= static_cast<tcflag_t>(CLOCAL | CREAD);  // ignore modem lines, receive
+    settings.c_cflag &=
+        static_cast<tcflag_t>(~static_cast<tcflag_t>(CSTOPB | CRTSCTS));  // 1 stop, no RTS/CTS
+    settings.c_iflag &=
+        static_cast<tcflag_t>(~static_cast<tcflag_t>(IXON | IXOFF | IXANY));  // no XON/XOFF
     settings.c_cc[VMIN] = 0;  // never block in read(): timeouts are ppoll()'s
     settings.c_cc[VTIME] = 0;
     if (::cfsetispeed(&settings, rate->code) != 0 || ::cfsetospeed(&settings, rate->code) != 0 ||
@@ -221,7 +227,8 @@ bool PosixSerialPort::open(const char* path, std::uint32_t baud_bps, std::span<c
     termios applied{};
     if (::tcgetattr(fd, &applied) != 0 || ::cfgetospeed(&applied) != rate->code ||
         (applied.c_lflag & static_cast<tcflag_t>(ICANON | ECHO)) != 0U) {
-        report(error, "cannot set %s to raw mode at %u bit/s: the device did not keep the settings "
+        report(error,
+               "cannot set %s to raw mode at %u bit/s: the device did not keep the settings "
                "(speed or raw mode read back differently)",
                path, static_cast<unsigned>(baud_bps));
         ::close(fd);
@@ -237,7 +244,8 @@ bool PosixSerialPort::open(const char* path, std::uint32_t baud_bps, std::span<c
     return true;
 }
 
-SerialStatus PosixSerialPort::wait_for(short events, std::int64_t deadline_ns, bool& hang_up) noexcept {
+SerialStatus PosixSerialPort::wait_for(short events, std::int64_t deadline_ns,
+                                       bool& hang_up) noexcept {
     hang_up = false;
     for (int attempt = 0; attempt < kMaxInterruptions; ++attempt) {
         const std::int64_t remaining_ns = deadline_ns - monotonic_ns();
@@ -306,7 +314,8 @@ SerialTransfer PosixSerialPort::read(std::span<std::uint8_t> buffer, std::uint32
     return {SerialStatus::timeout, 0};
 }
 
-SerialTransfer PosixSerialPort::write(std::span<const std::uint8_t> bytes, std::uint32_t timeout_us) {
+SerialTransfer PosixSerialPort::write(std::span<const std::uint8_t> bytes,
+                                      std::uint32_t timeout_us) {
     if (fd_ < 0) {
         ++counters_.backend_errors;
         return {SerialStatus::failed, 0};

@@ -39,7 +39,8 @@ public:
     /// another speed is an error too) and discards anything already queued on it.  On failure returns false,
     /// leaves the port closed and writes a NUL-terminated message naming the device and the cause
     /// into `error` (truncated to fit; nothing written if error is empty).
-    [[nodiscard]] bool open(const char* path, std::uint32_t baud_bps, std::span<char> error) noexcept;
+    [[nodiscard]] bool open(const char* path, std::uint32_t baud_bps,
+                            std::span<char> error) noexcept;
     /// Closes the device (no-op if closed); baud() reads 0 afterwards.  The destructor calls it.
     void close() noexcept;
     [[nodiscard]] bool is_open() const noexcept { return fd_ >= 0; }
@@ -61,7 +62,8 @@ private:
     /// Waits until the device is ready for `events` (POLLIN / POLLOUT) or reports a hang-up, at
     /// most until `deadline_ns` (CLOCK_MONOTONIC); EINTR retried.  ok = ready (`hang_up` says
     /// whether POLLHUP was among the events), timeout, or failed (POLLNVAL, ppoll error).
-    [[nodiscard]] SerialStatus wait_for(short events, std::int64_t deadline_ns, bool& hang_up) noexcept;
+    [[nodiscard]] SerialStatus wait_for(short events, std::int64_t deadline_ns,
+                                        bool& hang_up) noexcept;
 
     int fd_{-1};
     std::uint32_t baud_bps_{0};

@@ -77,7 +77,9 @@ CanFrame from_kernel(const can_frame& kernel) {
 
 }  // namespace
 
-SocketCanBus::~SocketCanBus() { close(); }
+SocketCanBus::~SocketCanBus() {
+    close();
+}
 
 void SocketCanBus::close() {
     if (socket_ >= 0) {
@@ -111,7 +113,8 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
     }
     std::vector<can_filter> filters;
     for (const std::uint32_t id : config.receive_ids) {
-        filters.push_back(can_filter{id & CAN_SFF_MASK, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+        filters.push_back(
+            can_filter{id & CAN_SFF_MASK, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
     }
     if (!config.receive_ids.empty() &&
         setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
@@ -125,7 +128,8 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
     if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &error_mask, sizeof(error_mask)) != 0 ||
         setsockopt(fd, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof(on)) != 0 ||
         setsockopt(fd, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on)) != 0) {
-        error = where + ": " + system_reason("setsockopt(error filter / SO_TIMESTAMP / SO_RXQ_OVFL)");
+        error =
+            where + ": " + system_reason("setsockopt(error filter / SO_TIMESTAMP / SO_RXQ_OVFL)");
         close();
         return false;
     }
@@ -163,7 +167,8 @@ CanStatus SocketCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {
             ++counters_.send_failures;
             return CanStatus::bus_off;
         }
-        const bool queue_full = written < 0 && (errno == EAGAIN || errno == ENOBUFS || errno == EINTR);
+        const bool queue_full =
+            written < 0 && (errno == EAGAIN || errno == ENOBUFS || errno == EINTR);
         if (!queue_full) {
             ++counters_.send_failures;
             ++counters_.backend_errors;
@@ -184,7 +189,8 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
     for (int attempt = 0; attempt < 2; ++attempt) {  // bound: one wait, then one more read
         can_frame kernel{};
         iovec vector{&kernel, sizeof(kernel)};
-        alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))]{};
+        alignas(cmsghdr) char
+            control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(std::uint32_t))]{};
         msghdr message{};
         message.msg_iov = &vector;
         message.msg_iovlen = 1;
@@ -207,7 +213,8 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
                     counters_.dropped = dropped;  // the kernel's running total for this socket
                 }
             }
-            const std::uint64_t age_us = realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
+            const std::uint64_t age_us =
+                realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
             received.frame = from_kernel(kernel);
             received.timestamp_us = monotonic_now > age_us ? monotonic_now - age_us : 0U;
             count_received_frame(counters_, received.frame);

@@ -25,7 +25,7 @@
 namespace scopekin::hal {
 
 struct SocketCanConfig {
-    std::string interface{"can0"};
+    std::string interface { "can0" };
     /// Standard identifiers to receive; empty = every frame.
     std::span<const std::uint32_t> receive_ids{};
     bool receive_error_frames{true};

@@ -21,89 +21,105 @@ namespace {
 namespace fs = std::filesystem;
 
 struct DemoOptions {
-  std::string out;
-  std::string scenario = SCOPEKIN_DEMO_SCENARIO;
-  std::uint64_t seed = 1;
-  bool quiet = false;
+    std::string out;
+    std::string scenario = SCOPEKIN_DEMO_SCENARIO;
+    std::uint64_t seed = 1;
+    bool quiet = false;
 };
 
 std::string default_folder() {
-  const std::time_t now = std::time(nullptr);
-  char name[64];
-  std::strftime(name, sizeof name, "scopekin-demo-%Y%m%d-%H%M%S", std::localtime(&now));
-  return name;
+    const std::time_t now = std::time(nullptr);
+    char name[64];
+    std::strftime(name, sizeof name, "scopekin-demo-%Y%m%d-%H%M%S", std::localtime(&now));
+    return name;
 }
 
 /// Draws the plots with the bundled script (python3-matplotlib). Returns the script's status.
 int draw_plots(const fs::path& dir, bool quiet) {
-  const std::string command = std::string(SCOPEKIN_PYTHON) + " '" + SCOPEKIN_PLOT_SCRIPT + "' '" + dir.string() +
-                              "'" + (quiet ? " --quiet" : "");
-  const int status = std::system(command.c_str());
-  if (status == -1 || !WIFEXITED(status)) return 3;
-  return WEXITSTATUS(status);
+    const std::string command = std::string(SCOPEKIN_PYTHON) + " '" + SCOPEKIN_PLOT_SCRIPT + "' '" +
+                                dir.string() + "'" + (quiet ? " --quiet" : "");
+    const int status = std::system(command.c_str());
+    if (status == -1 || !WIFEXITED(status)) return 3;
+    return WEXITSTATUS(status);
 }
 
 int run_demo(const DemoOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  model::Scenario sc = model::read_scenario_file(options.scenario);  // ModelError: exit 2
-  if (sc.kind != model::ScenarioKind::world) {
-    std::cerr << "scopekin demo: " << options.scenario << " is not a world scenario (no colon)\n";
-    return 2;
-  }
-  const fs::path dir = options.out.empty() ? fs::path(default_folder()) : fs::path(options.out);
-  std::printf("scopekin demo: %s\nwriting into %s\n", sc.description.c_str(), dir.string().c_str());
-  std::fflush(stdout);
-  try {
-    LiveRunOptions live;
-    live.out = dir;
-    live.seed = options.seed;
-    live.quiet = options.quiet;
-    live.command = "demo";
-    const LiveRunReport report = run_live_to_folder(sc, live);
-    print_run_tables(report);
-    if (!report.complete) {
-      std::cerr << "scopekin demo: the simulation failed: " << report.summary["message"].get<std::string>() << "\n";
-      return 1;
+    const auto start = std::chrono::steady_clock::now();
+    model::Scenario sc = model::read_scenario_file(options.scenario);  // ModelError: exit 2
+    if (sc.kind != model::ScenarioKind::world) {
+        std::cerr << "scopekin demo: " << options.scenario
+                  << " is not a world scenario (no colon)\n";
+        return 2;
     }
-    if (!options.quiet) std::cerr << "drawing the plots ..." << std::endl;
-    const int plots = draw_plots(dir, options.quiet);
-    if (plots != 0) {
-      std::cerr << "scopekin demo: the plots could not be drawn (" << SCOPEKIN_PLOT_SCRIPT
-                << " exited " << plots << "; is python3-matplotlib installed? ./scopekin.sh installs it)\n";
-      return 3;
+    const fs::path dir = options.out.empty() ? fs::path(default_folder()) : fs::path(options.out);
+    std::printf("scopekin demo: %s\nwriting into %s\n", sc.description.c_str(),
+                dir.string().c_str());
+    std::fflush(stdout);
+    try {
+        LiveRunOptions live;
+        live.out = dir;
+        live.seed = options.seed;
+        live.quiet = options.quiet;
+        live.command = "demo";
+        const LiveRunReport report = run_live_to_folder(sc, live);
+        print_run_tables(report);
+        if (!report.complete) {
+            std::cerr << "scopekin demo: the simulation failed: "
+                      << report.summary["message"].get<std::string>() << "\n";
+            return 1;
+        }
+        if (!options.quiet) std::cerr << "drawing the plots ..." << std::endl;
+        const int plots = draw_plots(dir, options.quiet);
+        if (plots != 0) {
+            std::cerr << "scopekin demo: the plots could not be drawn (" << SCOPEKIN_PLOT_SCRIPT
+                      << " exited " << plots
+                      << "; is python3-matplotlib installed? ./scopekin.sh installs it)\n";
+            return 3;
+        }
+        const double wall =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::printf(
+            "\nwrote into %s: recording.csv, world.csv, firmware.csv, snapshots.json, "
+            "summary.json, forces.png, "
+            "advance.png, snapshots.png (%.1f s in all)\n",
+            dir.string().c_str(), wall);
+        return 0;
+    } catch (const OutputError& e) {
+        std::cerr << "scopekin demo: " << e.what() << "\n";
+        return 3;
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::printf("\nwrote into %s: recording.csv, world.csv, firmware.csv, snapshots.json, summary.json, forces.png, "
-                "advance.png, snapshots.png (%.1f s in all)\n",
-                dir.string().c_str(), wall);
-    return 0;
-  } catch (const OutputError& e) {
-    std::cerr << "scopekin demo: " << e.what() << "\n";
-    return 3;
-  }
 }
 
 }  // namespace
 
 void add_demo_command(CLI::App& app) {
-  auto options = std::make_shared<DemoOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "demo",
-      "The main job: a simulated colonoscopy through the bundled default colon and the unmodified firmware "
-      "(host_sim/scenarios/demo_n_loop.json): the tip locks at the sigmoid-descending junction, an N-shaped sigmoid "
-      "loop forms, the box's self-lock alarm fires, the physician withdraws with clockwise torque to straighten "
-      "it and advances again, steering the tip while the assistant presses on the abdomen, into the cecum. Prints "
-      "the alarm timeline, the box's fault flags and a summary table; writes "
-      "recording.csv, world.csv, firmware.csv, snapshots.json, summary.json and the plots forces.png, advance.png, "
-      "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid scenario, 3 an output (or a plot) "
-      "cannot be written.");
-  cmd->add_option("--out", options->out,
-                  "Output directory (default: a new folder scopekin-demo-YYYYMMDD-HHMMSS here; its name is printed)");
-  cmd->add_option("--scenario", options->scenario, "Another world scenario to run instead of the bundled one")
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--seed", options->seed, "Seed of the sensor models' noise and dropouts")->default_val(1);
-  cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
-  cmd->callback([options]() { throw CLI::RuntimeError(run_demo(*options)); });
+    auto options = std::make_shared<DemoOptions>();
+    CLI::App* cmd =
+        app.add_subcommand("demo",
+                           "The main job: a simulated colonoscopy through the bundled default "
+                           "colon and the unmodified firmware "
+                           "(host_sim/scenarios/demo_n_loop.json): the tip locks at the "
+                           "sigmoid-descending junction, an N-shaped sigmoid "
+                           "loop forms, the box's self-lock alarm fires, the physician withdraws "
+                           "with clockwise torque to straighten "
+                           "it and advances again, steering the tip while the assistant presses on "
+                           "the abdomen, into the cecum. Prints "
+                           "the alarm timeline, the box's fault flags and a summary table; writes "
+                           "recording.csv, world.csv, firmware.csv, snapshots.json, summary.json "
+                           "and the plots forces.png, advance.png, "
+                           "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid "
+                           "scenario, 3 an output (or a plot) "
+                           "cannot be written.");
+    cmd->add_option("--out", options->out,
+                    "Output directory (default: a new folder scopekin-demo-YYYYMMDD-HHMMSS here; "
+                    "its name is printed)");
+    cmd->add_option("--scenario", options->scenario,
+                    "Another world scenario to run instead of the bundled one")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--seed", options->seed, "Seed of the sensor models' noise and dropouts")
+        ->default_val(1);
+    cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
+    cmd->callback([options]() { throw CLI::RuntimeError(run_demo(*options)); });
 }
 
 }  // namespace scopekin::cli

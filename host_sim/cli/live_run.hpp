@@ -15,16 +15,16 @@
 namespace scopekin::cli {
 
 struct LiveRunOptions {
-  std::filesystem::path out;
-  std::uint64_t seed = 1;
-  bool quiet = false;
-  std::string command = "simulate";  ///< for messages
+    std::filesystem::path out;
+    std::uint64_t seed = 1;
+    bool quiet = false;
+    std::string command = "simulate";  ///< for messages
 };
 
 struct LiveRunReport {
-  host_sim::LiveResult result;
-  nlohmann::ordered_json summary;
-  bool complete = false;
+    host_sim::LiveResult result;
+    nlohmann::ordered_json summary;
+    bool complete = false;
 };
 
 /// Throws ModelError (bad scenario or sensor configuration: exit 2) or OutputError (exit 3).

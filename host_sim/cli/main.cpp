@@ -16,31 +16,33 @@
 #include "model/model_error.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"scopekin - colonoscope kinetics: the reference model, its verification, and the host simulator that runs the "
-               "sensor box's unmodified firmware on simulated or recorded data"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", "scopekin 0.1.0");
-  scopekin::cli::add_verify_command(app);
-  scopekin::cli::add_static_command(app);
-  scopekin::cli::add_simulate_command(app);
-  scopekin::cli::add_run_command(app);
-  scopekin::cli::add_replay_command(app);
-  scopekin::cli::add_demo_command(app);
-  scopekin::cli::add_batch_commands(app);
-  scopekin::cli::add_discrepancy_command(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::RuntimeError& status) {
-    return status.get_exit_code();
-  } catch (const CLI::ParseError& e) {
-    // --help / --version exit 0; every usage error exits 2, like an invalid input file.
-    return app.exit(e) == 0 ? 0 : 2;
-  } catch (const scopekin::model::ModelError& e) {
-    std::cerr << "scopekin: invalid model: " << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "scopekin: error: " << e.what() << "\n";
-    return 3;
-  }
-  return 0;
+    CLI::App app{
+        "scopekin - colonoscope kinetics: the reference model, its verification, and the host "
+        "simulator that runs the "
+        "sensor box's unmodified firmware on simulated or recorded data"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "scopekin 0.1.0");
+    scopekin::cli::add_verify_command(app);
+    scopekin::cli::add_static_command(app);
+    scopekin::cli::add_simulate_command(app);
+    scopekin::cli::add_run_command(app);
+    scopekin::cli::add_replay_command(app);
+    scopekin::cli::add_demo_command(app);
+    scopekin::cli::add_batch_commands(app);
+    scopekin::cli::add_discrepancy_command(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::RuntimeError& status) {
+        return status.get_exit_code();
+    } catch (const CLI::ParseError& e) {
+        // --help / --version exit 0; every usage error exits 2, like an invalid input file.
+        return app.exit(e) == 0 ? 0 : 2;
+    } catch (const scopekin::model::ModelError& e) {
+        std::cerr << "scopekin: invalid model: " << e.what() << "\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "scopekin: error: " << e.what() << "\n";
+        return 3;
+    }
+    return 0;
 }

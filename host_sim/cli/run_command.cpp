@@ -21,92 +21,108 @@ using Json = nlohmann::ordered_json;
 }  // namespace
 
 int run_recording(const RunOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  recording::RecordingReaderOptions reader_options;
-  reader_options.gap_threshold_s = options.gap_threshold_s;
-  recording::Recording rec;
-  try {
-    rec = recording::RecordingReader(reader_options).read_file(options.recording);
-  } catch (const recording::RecordingError& e) {
-    std::cerr << "scopekin run: invalid recording: " << e.what() << "\n";
-    return 2;
-  }
-  if (rec.rows.empty()) {
-    std::cerr << "scopekin run: invalid recording: " << options.recording << ": no rows after the header\n";
-    return 2;
-  }
-  try {
-    const fs::path dir(options.out);
-    prepare_directory(dir, {"firmware.csv", "firmware.csv.part", "summary.json"});
-    PartFile firmware_csv(dir / "firmware.csv", dir / "firmware.incomplete.csv");
-    host_sim::BoxObserver observer(&firmware_csv.stream());
-    host_sim::FirmwareLoop loop([&](const host_sim::BoxPeriod& p) { observer.observe(p); });
-    ProgressBar bar(options.quiet);
-    const double end_s = static_cast<double>(rec.rows.back().time_us) * 1e-6;
-    for (std::size_t i = 0; i < rec.rows.size(); ++i) {
-      loop.deliver(rec.rows[i]);
-      if (i % 1000 == 0) {
-        char text[64];
-        std::snprintf(text, sizeof text, "t=%.1f/%.1f s", static_cast<double>(rec.rows[i].time_us) * 1e-6, end_s);
-        bar.update(static_cast<double>(i) / static_cast<double>(rec.rows.size()), text);
-      }
+    const auto start = std::chrono::steady_clock::now();
+    recording::RecordingReaderOptions reader_options;
+    reader_options.gap_threshold_s = options.gap_threshold_s;
+    recording::Recording rec;
+    try {
+        rec = recording::RecordingReader(reader_options).read_file(options.recording);
+    } catch (const recording::RecordingError& e) {
+        std::cerr << "scopekin run: invalid recording: " << e.what() << "\n";
+        return 2;
     }
-    loop.finish(static_cast<std::uint64_t>(rec.rows.back().time_us));
-    bar.update(1.0, "done");
-    bar.done();
-    firmware_csv.finish(true);
+    if (rec.rows.empty()) {
+        std::cerr << "scopekin run: invalid recording: " << options.recording
+                  << ": no rows after the header\n";
+        return 2;
+    }
+    try {
+        const fs::path dir(options.out);
+        prepare_directory(dir, {"firmware.csv", "firmware.csv.part", "summary.json"});
+        PartFile firmware_csv(dir / "firmware.csv", dir / "firmware.incomplete.csv");
+        host_sim::BoxObserver observer(&firmware_csv.stream());
+        host_sim::FirmwareLoop loop([&](const host_sim::BoxPeriod& p) { observer.observe(p); });
+        ProgressBar bar(options.quiet);
+        const double end_s = static_cast<double>(rec.rows.back().time_us) * 1e-6;
+        for (std::size_t i = 0; i < rec.rows.size(); ++i) {
+            loop.deliver(rec.rows[i]);
+            if (i % 1000 == 0) {
+                char text[64];
+                std::snprintf(text, sizeof text, "t=%.1f/%.1f s",
+                              static_cast<double>(rec.rows[i].time_us) * 1e-6, end_s);
+                bar.update(static_cast<double>(i) / static_cast<double>(rec.rows.size()), text);
+            }
+        }
+        loop.finish(static_cast<std::uint64_t>(rec.rows.back().time_us));
+        bar.update(1.0, "done");
+        bar.done();
+        firmware_csv.finish(true);
 
-    Json gaps = Json::array();
-    for (const recording::RecordingGap& g : rec.gaps)
-      gaps.push_back({{"signal", g.signal}, {"start_s", g.start_s}, {"end_s", g.end_s}, {"duration_s", g.duration_s()}});
-    const Json box = observer.to_json();
-    Json s;
-    s["recording"] = options.recording;
-    s["status"] = "complete";
-    s["flagged"] = !rec.gaps.empty();
-    s["gaps"] = gaps;
-    s["rows"] = rec.rows.size();
-    s["first_time_s"] = static_cast<double>(rec.rows.front().time_us) * 1e-6;
-    s["last_time_s"] = end_s;
-    s["periods"] = loop.periods();
-    s["alarms"] = box["alarms"];
-    s["firmware"] = box;
-    s["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    s["files"] = {{"firmware", "firmware.csv"}};
-    write_json(dir / "summary.json", s);
-    for (const recording::RecordingGap& g : rec.gaps)
-      std::cerr << "scopekin run: warning: gap in " << g.signal << " from " << g.start_s << " s to " << g.end_s
-                << " s (" << g.duration_s() * 1000.0
-                << " ms without a sample): the box held its last value and flagged it stale (fault_flags in "
-                   "firmware.csv; summary.json \"gaps\")\n";
-    std::printf("complete: %zu rows, %.3f s, %llu firmware periods, %zu alarm(s)%s\nwrote %s, %s\n", rec.rows.size(),
-                end_s, static_cast<unsigned long long>(loop.periods()), box["alarms"].size(),
-                rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
-                (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
-    return 0;
-  } catch (const OutputError& e) {
-    std::cerr << "scopekin run: " << e.what() << "\n";
-    return 3;
-  }
+        Json gaps = Json::array();
+        for (const recording::RecordingGap& g : rec.gaps)
+            gaps.push_back({{"signal", g.signal},
+                            {"start_s", g.start_s},
+                            {"end_s", g.end_s},
+                            {"duration_s", g.duration_s()}});
+        const Json box = observer.to_json();
+        Json s;
+        s["recording"] = options.recording;
+        s["status"] = "complete";
+        s["flagged"] = !rec.gaps.empty();
+        s["gaps"] = gaps;
+        s["rows"] = rec.rows.size();
+        s["first_time_s"] = static_cast<double>(rec.rows.front().time_us) * 1e-6;
+        s["last_time_s"] = end_s;
+        s["periods"] = loop.periods();
+        s["alarms"] = box["alarms"];
+        s["firmware"] = box;
+        s["wall_time_s"] =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        s["files"] = {{"firmware", "firmware.csv"}};
+        write_json(dir / "summary.json", s);
+        for (const recording::RecordingGap& g : rec.gaps)
+            std::cerr << "scopekin run: warning: gap in " << g.signal << " from " << g.start_s
+                      << " s to " << g.end_s << " s (" << g.duration_s() * 1000.0
+                      << " ms without a sample): the box held its last value and flagged it stale "
+                         "(fault_flags in "
+                         "firmware.csv; summary.json \"gaps\")\n";
+        std::printf(
+            "complete: %zu rows, %.3f s, %llu firmware periods, %zu alarm(s)%s\nwrote %s, %s\n",
+            rec.rows.size(), end_s, static_cast<unsigned long long>(loop.periods()),
+            box["alarms"].size(), rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
+            (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
+        return 0;
+    } catch (const OutputError& e) {
+        std::cerr << "scopekin run: " << e.what() << "\n";
+        return 3;
+    }
 }
 
 void add_run_command(CLI::App& app) {
-  auto options = std::make_shared<RunOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "run",
-      "Feed a recording (CSV, host_sim/recording/RECORDING.md; `scopekin simulate` writes one) through the unmodified "
-      "firmware: its rows become the CAN frames and serial bytes the box receives, at their times; the box runs "
-      "every 5 ms. Writes DIR/firmware.csv (the box's outputs per period) and DIR/summary.json (alarms, gaps). A "
-      "malformed recording is refused with its line and column (exit 2); a gap in the handle signals is flagged, "
-      "not refused. Exit status 0 done, 2 invalid recording, 3 an output cannot be written.");
-  cmd->add_option("recording", options->recording, "Recording CSV file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out", options->out, "Output directory (created if missing; old outputs in it are replaced)")
-      ->required();
-  cmd->add_option("--gap-s", options->gap_threshold_s, "A handle signal silent longer than this [s] is a gap")
-      ->default_val(0.05)
-      ->check(CLI::PositiveNumber);
-  cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
-  cmd->callback([options]() { throw CLI::RuntimeError(run_recording(*options)); });
+    auto options = std::make_shared<RunOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "run",
+        "Feed a recording (CSV, host_sim/recording/RECORDING.md; `scopekin simulate` writes one) "
+        "through the unmodified "
+        "firmware: its rows become the CAN frames and serial bytes the box receives, at their "
+        "times; the box runs "
+        "every 5 ms. Writes DIR/firmware.csv (the box's outputs per period) and DIR/summary.json "
+        "(alarms, gaps). A "
+        "malformed recording is refused with its line and column (exit 2); a gap in the handle "
+        "signals is flagged, "
+        "not refused. Exit status 0 done, 2 invalid recording, 3 an output cannot be written.");
+    cmd->add_option("recording", options->recording, "Recording CSV file")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--out", options->out,
+                    "Output directory (created if missing; old outputs in it are replaced)")
+        ->required();
+    cmd->add_option("--gap-s", options->gap_threshold_s,
+                    "A handle signal silent longer than this [s] is a gap")
+        ->default_val(0.05)
+        ->check(CLI::PositiveNumber);
+    cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
+    cmd->callback([options]() { throw CLI::RuntimeError(run_recording(*options)); });
 }
 
 }  // namespace scopekin::cli

@@ -6,10 +6,10 @@
 namespace scopekin::cli {
 
 struct RunOptions {
-  std::string recording;
-  std::string out;
-  double gap_threshold_s = 0.05;
-  bool quiet = false;
+    std::string recording;
+    std::string out;
+    double gap_threshold_s = 0.05;
+    bool quiet = false;
 };
 
 /// The command's work; returns its exit status (also used by `batch`).

@@ -14,10 +14,10 @@
 #include <string>
 #include <system_error>
 
-#include "model/scenario/scenario.hpp"
-#include "model/scenario/simulation.hpp"
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
+#include "model/scenario/scenario.hpp"
+#include "model/scenario/simulation.hpp"
 
 namespace scopekin::cli {
 namespace {
@@ -25,115 +25,141 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 
-
 /// The keys every summary.json starts with.
 std::string num(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.7g", v);
-  return buffer;
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%.7g", v);
+    return buffer;
 }
 
-Json summary_header(const model::Scenario& sc, const char* kind, bool complete, const std::string& message) {
-  Json summary;
-  summary["scenario"] = sc.source;
-  summary["kind"] = kind;
-  summary["description"] = sc.description;
-  summary["status"] = complete ? "complete" : "failed";
-  summary["message"] = message;
-  return summary;
+Json summary_header(const model::Scenario& sc, const char* kind, bool complete,
+                    const std::string& message) {
+    Json summary;
+    summary["scenario"] = sc.source;
+    summary["kind"] = kind;
+    summary["description"] = sc.description;
+    summary["status"] = complete ? "complete" : "failed";
+    summary["message"] = message;
+    return summary;
 }
 
 int run_world(const model::Scenario& sc, const SimulateOptions& options) {
-  LiveRunOptions live;
-  live.out = options.out;
-  live.seed = options.seed;
-  live.quiet = options.quiet;
-  const LiveRunReport report = run_live_to_folder(sc, live);
-  const Json& s = report.summary;
-  const fs::path dir(options.out);
-  for (const auto& w : s["warnings"]) std::cerr << "scopekin simulate: warning: " << w.get<std::string>() << "\n";
-  if (!report.complete) {
-    std::cerr << "scopekin simulate: failed: " << s["message"].get<std::string>() << "\n"
-              << "wrote the files up to the failure into " << dir.string() << " (summary.json says what)\n";
-    return 1;
-  }
-  std::printf("complete: %.3f s simulated, %.1f s wall time (%.2fx real time); peak handle force %.2f N, "
-              "%zu alarm(s) from the box\n",
-              s["duration_s"].get<double>(), s["wall_time_s"].get<double>(), s["real_time_factor"].get<double>(),
-              s["peak_handle_force_N"]["true"].get<double>(), s["alarms"].size());
-  std::printf("wrote recording.csv, world.csv, firmware.csv, snapshots.json, summary.json into %s\n", dir.string().c_str());
-  return 0;
+    LiveRunOptions live;
+    live.out = options.out;
+    live.seed = options.seed;
+    live.quiet = options.quiet;
+    const LiveRunReport report = run_live_to_folder(sc, live);
+    const Json& s = report.summary;
+    const fs::path dir(options.out);
+    for (const auto& w : s["warnings"])
+        std::cerr << "scopekin simulate: warning: " << w.get<std::string>() << "\n";
+    if (!report.complete) {
+        std::cerr << "scopekin simulate: failed: " << s["message"].get<std::string>() << "\n"
+                  << "wrote the files up to the failure into " << dir.string()
+                  << " (summary.json says what)\n";
+        return 1;
+    }
+    std::printf(
+        "complete: %.3f s simulated, %.1f s wall time (%.2fx real time); peak handle force %.2f N, "
+        "%zu alarm(s) from the box\n",
+        s["duration_s"].get<double>(), s["wall_time_s"].get<double>(),
+        s["real_time_factor"].get<double>(), s["peak_handle_force_N"]["true"].get<double>(),
+        s["alarms"].size());
+    std::printf(
+        "wrote recording.csv, world.csv, firmware.csv, snapshots.json, summary.json into %s\n",
+        dir.string().c_str());
+    return 0;
 }
 
 int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
-  model::io::BeamProblem& p = *sc.beam_problem;
-  const fs::path dir(options.out);
-  prepare_directory(dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "summary.json"});
-  PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
-  if (!options.quiet)
-    std::cerr << "solving the free beam " << sc.source << " statically: " << p.beam.element_count() << " elements, "
-              << p.settings.load_steps << " load steps ..." << std::endl;
-  const auto start = std::chrono::steady_clock::now();
-  const model::StaticReport report = model::solve_static(p.beam, p.loads, p.supports, p.settings);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  recording.stream() << "node,x_mm,y_mm,z_mm\n";
-  for (std::size_t node : p.output_nodes) {
-    const Eigen::Vector3d x = p.beam.position(node);
-    recording.stream() << node << ',' << num(x.x()) << ',' << num(x.y()) << ',' << num(x.z()) << '\n';
-  }
-  const fs::path recording_file = recording.finish(report.converged);
-  std::size_t accepted = 0;
-  for (const auto& s : report.steps) accepted += s.converged ? 1 : 0;
-  Json summary = summary_header(sc, "free_beam", report.converged, report.message);
-  summary["converged"] = report.converged;
-  summary["newton_iterations"] = report.total_iterations;
-  summary["load_steps_accepted"] = accepted;
-  summary["load_steps_attempted"] = report.steps.size();
-  summary["wall_time_s"] = wall;
-  summary["output_nodes"] = p.output_nodes;
-  summary["files"] = Json{{"recording", recording_file.filename().string()}};
-  write_json(dir / "summary.json", summary);
-  if (!report.converged) {
-    std::cerr << "scopekin simulate: failed: the static solve did not converge: " << report.message << "\n";
-    return 1;
-  }
-  std::printf("complete: converged after %d Newton iterations in %.3f s\nwrote %s, %s\n", report.total_iterations, wall,
-              recording_file.string().c_str(), (dir / "summary.json").string().c_str());
-  return 0;
+    model::io::BeamProblem& p = *sc.beam_problem;
+    const fs::path dir(options.out);
+    prepare_directory(
+        dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "summary.json"});
+    PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
+    if (!options.quiet)
+        std::cerr << "solving the free beam " << sc.source
+                  << " statically: " << p.beam.element_count() << " elements, "
+                  << p.settings.load_steps << " load steps ..." << std::endl;
+    const auto start = std::chrono::steady_clock::now();
+    const model::StaticReport report = model::solve_static(p.beam, p.loads, p.supports, p.settings);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    recording.stream() << "node,x_mm,y_mm,z_mm\n";
+    for (std::size_t node : p.output_nodes) {
+        const Eigen::Vector3d x = p.beam.position(node);
+        recording.stream() << node << ',' << num(x.x()) << ',' << num(x.y()) << ',' << num(x.z())
+                           << '\n';
+    }
+    const fs::path recording_file = recording.finish(report.converged);
+    std::size_t accepted = 0;
+    for (const auto& s : report.steps)
+        accepted += s.converged ? 1 : 0;
+    Json summary = summary_header(sc, "free_beam", report.converged, report.message);
+    summary["converged"] = report.converged;
+    summary["newton_iterations"] = report.total_iterations;
+    summary["load_steps_accepted"] = accepted;
+    summary["load_steps_attempted"] = report.steps.size();
+    summary["wall_time_s"] = wall;
+    summary["output_nodes"] = p.output_nodes;
+    summary["files"] = Json{{"recording", recording_file.filename().string()}};
+    write_json(dir / "summary.json", summary);
+    if (!report.converged) {
+        std::cerr << "scopekin simulate: failed: the static solve did not converge: "
+                  << report.message << "\n";
+        return 1;
+    }
+    std::printf("complete: converged after %d Newton iterations in %.3f s\nwrote %s, %s\n",
+                report.total_iterations, wall, recording_file.string().c_str(),
+                (dir / "summary.json").string().c_str());
+    return 0;
 }
 
 }  // namespace
 
 int run_simulate(const SimulateOptions& options) {
-  model::Scenario sc = model::read_scenario_file(options.scenario);  // ModelError: exit 2
-  try {
-    return sc.kind == model::ScenarioKind::free_beam ? run_free_beam(sc, options) : run_world(sc, options);
-  } catch (const OutputError& e) {
-    std::cerr << "scopekin simulate: " << e.what() << "\n";
-    return 3;
-  }
+    model::Scenario sc = model::read_scenario_file(options.scenario);  // ModelError: exit 2
+    try {
+        return sc.kind == model::ScenarioKind::free_beam ? run_free_beam(sc, options)
+                                                         : run_world(sc, options);
+    } catch (const OutputError& e) {
+        std::cerr << "scopekin simulate: " << e.what() << "\n";
+        return 3;
+    }
 }
 
 void add_simulate_command(CLI::App& app) {
-  auto options = std::make_shared<SimulateOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "simulate",
-      "Run a scenario file (schema in model/scenario/README.md). A world scenario is simulated live: the scope in "
-      "the colon driven by the procedure (with the scenario's truth effects), read by the sensor models every 1 ms, "
-      "and the unmodified firmware fed with what they deliver every 5 ms. Writes DIR/recording.csv (what the "
-      "sensors delivered, host_sim/recording/RECORDING.md), DIR/world.csv (the true state at outputs.sample_rate_Hz), "
-      "DIR/firmware.csv (the box's outputs per period), DIR/snapshots.json and DIR/summary.json. A free beam "
-      "scenario is solved statically: DIR/recording.csv has one row per output node. While running, CSV files "
-      "are NAME.part; a run that fails leaves NAME.incomplete.csv and a summary with status \"failed\". Exit "
-      "status 0 complete, 1 the run failed (a step or the contact solver did not converge, or the state became "
-      "unphysical), 2 invalid scenario (nothing written), 3 an output cannot be written.");
-  cmd->add_option("scenario", options->scenario, "Scenario JSON file")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--out", options->out, "Output directory (created if missing; old outputs in it are replaced)")
-      ->required();
-  cmd->add_option("--seed", options->seed, "Seed of the sensor models' noise and dropouts (same seed, same run)")
-      ->default_val(1);
-  cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
-  cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
+    auto options = std::make_shared<SimulateOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "simulate",
+        "Run a scenario file (schema in model/scenario/README.md). A world scenario is simulated "
+        "live: the scope in "
+        "the colon driven by the procedure (with the scenario's truth effects), read by the sensor "
+        "models every 1 ms, "
+        "and the unmodified firmware fed with what they deliver every 5 ms. Writes "
+        "DIR/recording.csv (what the "
+        "sensors delivered, host_sim/recording/RECORDING.md), DIR/world.csv (the true state at "
+        "outputs.sample_rate_Hz), "
+        "DIR/firmware.csv (the box's outputs per period), DIR/snapshots.json and DIR/summary.json. "
+        "A free beam "
+        "scenario is solved statically: DIR/recording.csv has one row per output node. While "
+        "running, CSV files "
+        "are NAME.part; a run that fails leaves NAME.incomplete.csv and a summary with status "
+        "\"failed\". Exit "
+        "status 0 complete, 1 the run failed (a step or the contact solver did not converge, or "
+        "the state became "
+        "unphysical), 2 invalid scenario (nothing written), 3 an output cannot be written.");
+    cmd->add_option("scenario", options->scenario, "Scenario JSON file")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--out", options->out,
+                    "Output directory (created if missing; old outputs in it are replaced)")
+        ->required();
+    cmd->add_option("--seed", options->seed,
+                    "Seed of the sensor models' noise and dropouts (same seed, same run)")
+        ->default_val(1);
+    cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
+    cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
 }
 
 }  // namespace scopekin::cli

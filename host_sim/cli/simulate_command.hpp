@@ -9,10 +9,10 @@
 namespace scopekin::cli {
 
 struct SimulateOptions {
-  std::string scenario;
-  std::string out;
-  std::uint64_t seed = 1;
-  bool quiet = false;
+    std::string scenario;
+    std::string out;
+    std::uint64_t seed = 1;
+    bool quiet = false;
 };
 
 /// The command's work; returns its exit status (also used by `batch`). Throws ModelError for an

@@ -28,10 +28,17 @@ bool is_held_out_block(int block);
 
 /// fit_training and fit_held_out: the training / held-out samples within the fits' scored spans
 /// (MeasuredRecording::fit_spans_s; all of them when it is empty).
-enum class SampleSet { training, held_out, all, fit_training, fit_held_out };
+enum class SampleSet {
+    training,
+    held_out,
+    all,
+    fit_training,
+    fit_held_out
+};
 bool in_set(const MeasuredRecording& data, double time_s, SampleSet set);
 /// How many of an output's samples fall in a set.
-std::size_t samples_in_set(const MeasuredRecording& data, const MeasuredSeries& series, SampleSet set);
+std::size_t samples_in_set(const MeasuredRecording& data, const MeasuredSeries& series,
+                           SampleSet set);
 
 /// Second differences needed per component for a noise estimate.
 inline constexpr std::size_t kMinNoiseSamples = 20;
@@ -42,13 +49,14 @@ std::vector<double> estimate_noise(const MeasuredRecording& data);
 bool assessable(const std::vector<double>& sigma, std::size_t output);
 
 /// RMS of |measured - predicted| over a sample set [output unit]; 0 for an empty set.
-double rms_error(const MeasuredRecording& data, const ModelPrediction& p, std::size_t output, SampleSet set);
+double rms_error(const MeasuredRecording& data, const ModelPrediction& p, std::size_t output,
+                 SampleSet set);
 
 /// The fitting residual: for every output o and sample i of the set, the components of
 /// (measured - predicted) / (sigma_o sqrt(n_o)). Its squared norm is the sum over outputs of
 /// the mean squared error in units of the noise: about 1 per output for a perfect model.
-Eigen::VectorXd normalised_residuals(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
-                                     SampleSet set);
+Eigen::VectorXd normalised_residuals(const MeasuredRecording& data, const ModelPrediction& p,
+                                     const std::vector<double>& sigma, SampleSet set);
 
 /// What the hand does at t: "push", "pull", "hold" or "twist" (from the encoder's rates over 0.2 s).
 std::string phase_at(const MeasuredRecording& data, double time_s);
@@ -56,7 +64,7 @@ std::string phase_at(const MeasuredRecording& data, double time_s);
 /// Where the disagreement is: for each grouping (region, phase, speed, depth), each group's
 /// sample count and, per output, RMS error and its ratio to the noise, with `significant` set
 /// where the ratio exceeds `threshold` on at least 10 samples.
-nlohmann::ordered_json locate(const MeasuredRecording& data, const ModelPrediction& p, const std::vector<double>& sigma,
-                              double threshold);
+nlohmann::ordered_json locate(const MeasuredRecording& data, const ModelPrediction& p,
+                              const std::vector<double>& sigma, double threshold);
 
 }  // namespace scopekin::discrepancy

@@ -24,21 +24,22 @@
 namespace scopekin::discrepancy {
 
 struct FittedParameter {
-  std::string key;      ///< the name in the fit (the effect's key, or a derived one)
-  std::string unit;
-  double lo = 0, hi = 0;
-  double neutral = 0;   ///< where the effect vanishes (the fit starts there)
-  double step = 0;      ///< finite-difference step
+    std::string key;  ///< the name in the fit (the effect's key, or a derived one)
+    std::string unit;
+    double lo = 0, hi = 0;
+    double neutral = 0;  ///< where the effect vanishes (the fit starts there)
+    double step = 0;     ///< finite-difference step
 };
 
 struct Candidate {
-  std::string name;     ///< the effect's identifier
-  std::string acts;     ///< where it acts, for the report
-  std::vector<FittedParameter> parameters;
-  /// Held parameters, read off the baseline residual where needed (sigmoid_mobility).
-  std::function<nlohmann::json(const MeasuredRecording&, const ModelPrediction& baseline)> held;
-  /// The truth_effects entry for fitted values and the held parameters.
-  std::function<nlohmann::json(const std::vector<double>& values, const nlohmann::json& held)> entry;
+    std::string name;  ///< the effect's identifier
+    std::string acts;  ///< where it acts, for the report
+    std::vector<FittedParameter> parameters;
+    /// Held parameters, read off the baseline residual where needed (sigmoid_mobility).
+    std::function<nlohmann::json(const MeasuredRecording&, const ModelPrediction& baseline)> held;
+    /// The truth_effects entry for fitted values and the held parameters.
+    std::function<nlohmann::json(const std::vector<double>& values, const nlohmann::json& held)>
+        entry;
 };
 
 /// The six effects of the host simulator's library, in EFFECTS.md order.
@@ -48,10 +49,11 @@ const std::vector<Candidate>& candidate_library();
 /// of its noise): frequency [Hz] in 0.05-2 Hz, and the principal direction of the position
 /// residuals at it (unit, colon frame; a first guess: the screening fits the direction).
 struct PeriodicResidual {
-  double frequency_Hz = 0.25;
-  Eigen::Vector3d direction = Eigen::Vector3d::UnitY();
+    double frequency_Hz = 0.25;
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitY();
 };
-PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data, const ModelPrediction& baseline,
+PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
+                                             const ModelPrediction& baseline,
                                              const std::vector<double>& sigma);
 
 }  // namespace scopekin::discrepancy

@@ -20,45 +20,46 @@
 namespace scopekin::discrepancy {
 
 struct WorkflowOptions {
-  nlohmann::json model;                 ///< the current model (default_model() if not given)
-  std::string model_source = "default model";
-  unsigned threads = 2;
-  double significance = 2.0;            ///< held-out RMS error / noise above which an output disagrees
-  double min_share = 0.75;              ///< of the excess error a named effect must explain
-  /// Recording seconds a fit's run simulates at most (fit_windows.hpp); longer recordings are
-  /// fitted on windows.
-  double fit_budget_s = kDefaultFitBudget_s;
-  /// Stage text and overall fraction done, now and then.
-  std::function<void(const std::string&, double)> progress;
+    nlohmann::json model;  ///< the current model (default_model() if not given)
+    std::string model_source = "default model";
+    unsigned threads = 2;
+    double significance = 2.0;  ///< held-out RMS error / noise above which an output disagrees
+    double min_share = 0.75;    ///< of the excess error a named effect must explain
+    /// Recording seconds a fit's run simulates at most (fit_windows.hpp); longer recordings are
+    /// fitted on windows.
+    double fit_budget_s = kDefaultFitBudget_s;
+    /// Stage text and overall fraction done, now and then.
+    std::function<void(const std::string&, double)> progress;
 };
 
 struct DiscrepancyContext {
-  /// Checks the fit budget, places the fit windows, estimates the noise and reads the model, in
-  /// that order (DiscrepancyInputError, model::ModelError saying what is wrong). The model as
-  /// given is run by run_model_as_given.
-  DiscrepancyContext(const MeasuredRecording& recording, const WorkflowOptions& options);
-  DiscrepancyContext(const DiscrepancyContext&) = delete;
-  DiscrepancyContext& operator=(const DiscrepancyContext&) = delete;
+    /// Checks the fit budget, places the fit windows, estimates the noise and reads the model, in
+    /// that order (DiscrepancyInputError, model::ModelError saying what is wrong). The model as
+    /// given is run by run_model_as_given.
+    DiscrepancyContext(const MeasuredRecording& recording, const WorkflowOptions& options);
+    DiscrepancyContext(const DiscrepancyContext&) = delete;
+    DiscrepancyContext& operator=(const DiscrepancyContext&) = delete;
 
-  /// The model as given over the whole recording (saving the windows' states): `baseline` and
-  /// its costs. DiscrepancyInputError if it cannot follow the recording.
-  void run_model_as_given(const std::function<void(double)>& progress);
+    /// The model as given over the whole recording (saving the windows' states): `baseline` and
+    /// its costs. DiscrepancyInputError if it cannot follow the recording.
+    void run_model_as_given(const std::function<void(double)>& progress);
 
-  /// normalised_residuals (analysis.hpp) of a prediction against this recording and noise.
-  Eigen::VectorXd residuals(const ModelPrediction& p, SampleSet set) const {
-    return normalised_residuals(data, p, sigma, set);
-  }
+    /// normalised_residuals (analysis.hpp) of a prediction against this recording and noise.
+    Eigen::VectorXd residuals(const ModelPrediction& p, SampleSet set) const {
+        return normalised_residuals(data, p, sigma, set);
+    }
 
-  const WorkflowOptions& options;
-  MeasuredRecording data;          ///< the recording, with the spans the fits score (fit_spans_s)
-  std::vector<RunWindow> windows;  ///< the fit windows; none: every run covers the whole recording
-  std::vector<double> sigma;       ///< noise SD per output (estimate_noise)
-  double noise_floor = 0.0;        ///< held-out cost of noise alone: 1 per assessed output
-  ModelSpec model;
-  Evaluator evaluator;             ///< runs `model` under `data`
-  ModelPrediction baseline;        ///< the model as given, whole recording
-  double cost_before = 0.0;        ///< its held-out cost
-  double cost_before_fit = 0.0;    ///< on the held-out windows (all held-out data without windows)
+    const WorkflowOptions& options;
+    MeasuredRecording data;  ///< the recording, with the spans the fits score (fit_spans_s)
+    std::vector<RunWindow>
+        windows;                ///< the fit windows; none: every run covers the whole recording
+    std::vector<double> sigma;  ///< noise SD per output (estimate_noise)
+    double noise_floor = 0.0;   ///< held-out cost of noise alone: 1 per assessed output
+    ModelSpec model;
+    Evaluator evaluator;           ///< runs `model` under `data`
+    ModelPrediction baseline;      ///< the model as given, whole recording
+    double cost_before = 0.0;      ///< its held-out cost
+    double cost_before_fit = 0.0;  ///< on the held-out windows (all held-out data without windows)
 };
 
 }  // namespace scopekin::discrepancy

@@ -11,98 +11,108 @@ namespace scopekin::discrepancy {
 Evaluator::Evaluator(const ModelSpec& model, const MeasuredRecording& data, unsigned threads)
     : model_(model), data_(data), threads_(std::max(1U, threads)) {}
 
-ModelPrediction Evaluator::run_baseline(std::vector<RunWindow> windows, const std::function<void(double)>& progress) {
-  ++runs_;
-  windows_ = std::move(windows);
-  ModelPrediction p = predict(model_, nlohmann::json::array(), data_, progress, &windows_, &states_);
-  h_s_ = p.h_s;
-  simulated_steps_ += p.steps;
-  if (!p.ok) windows_.clear();
-  return p;
+ModelPrediction Evaluator::run_baseline(std::vector<RunWindow> windows,
+                                        const std::function<void(double)>& progress) {
+    ++runs_;
+    windows_ = std::move(windows);
+    ModelPrediction p =
+        predict(model_, nlohmann::json::array(), data_, progress, &windows_, &states_);
+    h_s_ = p.h_s;
+    simulated_steps_ += p.steps;
+    if (!p.ok) windows_.clear();
+    return p;
 }
 
 ModelPrediction Evaluator::run_part(const nlohmann::json& effects, RunScope scope,
                                     const std::vector<std::size_t>& which) const {
-  ModelPrediction p = scope == RunScope::full || !windowed()
-                          ? predict(model_, effects, data_)
-                          : predict_windows(model_, effects, data_, windows_, states_, which);
-  simulated_steps_ += p.steps;
-  return p;
+    ModelPrediction p = scope == RunScope::full || !windowed()
+                            ? predict(model_, effects, data_)
+                            : predict_windows(model_, effects, data_, windows_, states_, which);
+    simulated_steps_ += p.steps;
+    return p;
 }
 
 ModelPrediction Evaluator::run(const nlohmann::json& effects, RunScope scope) const {
-  return run_all(std::vector<std::pair<nlohmann::json, RunScope>>{{effects, scope}}).front();
+    return run_all(std::vector<std::pair<nlohmann::json, RunScope>>{{effects, scope}}).front();
 }
 
-std::vector<ModelPrediction> Evaluator::run_all(const std::vector<nlohmann::json>& lists, RunScope scope) const {
-  std::vector<std::pair<nlohmann::json, RunScope>> requests;
-  for (const nlohmann::json& l : lists) requests.emplace_back(l, scope);
-  return run_all(requests);
+std::vector<ModelPrediction> Evaluator::run_all(const std::vector<nlohmann::json>& lists,
+                                                RunScope scope) const {
+    std::vector<std::pair<nlohmann::json, RunScope>> requests;
+    for (const nlohmann::json& l : lists)
+        requests.emplace_back(l, scope);
+    return run_all(requests);
 }
 
-std::vector<ModelPrediction> Evaluator::run_all(const std::vector<std::pair<nlohmann::json, RunScope>>& requests) const {
-  // Tasks: a full run is one task; a windowed run is split by windows into as many parts as
-  // leave no thread idle (one part each when there are at least as many runs as threads).
-  struct Task {
-    std::size_t request;
-    std::vector<std::size_t> windows;
-  };
-  std::vector<Task> tasks;
-  const std::size_t parts = std::max<std::size_t>(1, threads_ / std::max<std::size_t>(1, requests.size()));
-  for (std::size_t r = 0; r < requests.size(); ++r) {
-    ++runs_;
-    if (requests[r].second == RunScope::full || !windowed()) {
-      tasks.push_back({r, {}});
-      continue;
+std::vector<ModelPrediction> Evaluator::run_all(
+    const std::vector<std::pair<nlohmann::json, RunScope>>& requests) const {
+    // Tasks: a full run is one task; a windowed run is split by windows into as many parts as
+    // leave no thread idle (one part each when there are at least as many runs as threads).
+    struct Task {
+        std::size_t request;
+        std::vector<std::size_t> windows;
+    };
+    std::vector<Task> tasks;
+    const std::size_t parts =
+        std::max<std::size_t>(1, threads_ / std::max<std::size_t>(1, requests.size()));
+    for (std::size_t r = 0; r < requests.size(); ++r) {
+        ++runs_;
+        if (requests[r].second == RunScope::full || !windowed()) {
+            tasks.push_back({r, {}});
+            continue;
+        }
+        std::vector<std::size_t> which;
+        for (std::size_t w = 0; w < windows_.size(); ++w)
+            if (requests[r].second == RunScope::fit_all ||
+                is_held_out_block(windows_[w].block) ==
+                    (requests[r].second == RunScope::fit_held_out))
+                which.push_back(w);
+        const std::size_t n = std::min(parts, which.size());
+        for (std::size_t part = 0; part < n; ++part) {
+            Task t{r, {}};
+            for (std::size_t k = part; k < which.size(); k += n)
+                t.windows.push_back(which[k]);
+            tasks.push_back(std::move(t));
+        }
     }
-    std::vector<std::size_t> which;
-    for (std::size_t w = 0; w < windows_.size(); ++w)
-      if (requests[r].second == RunScope::fit_all ||
-          is_held_out_block(windows_[w].block) == (requests[r].second == RunScope::fit_held_out))
-        which.push_back(w);
-    const std::size_t n = std::min(parts, which.size());
-    for (std::size_t part = 0; part < n; ++part) {
-      Task t{r, {}};
-      for (std::size_t k = part; k < which.size(); k += n) t.windows.push_back(which[k]);
-      tasks.push_back(std::move(t));
+    std::vector<ModelPrediction> results(tasks.size());
+    std::atomic<std::size_t> next{0};
+    auto worker = [&] {
+        for (std::size_t k = next++; k < tasks.size(); k = next++)
+            results[k] = run_part(requests[tasks[k].request].first,
+                                  requests[tasks[k].request].second, tasks[k].windows);
+    };
+    std::vector<std::future<void>> workers;
+    for (unsigned w = 0; w < std::min<std::size_t>(threads_, tasks.size()); ++w)
+        workers.push_back(std::async(std::launch::async, worker));
+    for (auto& w : workers)
+        w.get();
+    // Parts of one windowed run fill disjoint samples: merge them.
+    std::vector<ModelPrediction> out(requests.size());
+    std::vector<bool> seen(requests.size(), false);
+    for (std::size_t k = 0; k < tasks.size(); ++k) {
+        ModelPrediction& into = out[tasks[k].request];
+        ModelPrediction& part = results[k];
+        if (!seen[tasks[k].request]) {
+            into = std::move(part);
+            seen[tasks[k].request] = true;
+            continue;
+        }
+        if (!into.ok) continue;
+        if (!part.ok) {
+            into = std::move(part);
+            continue;
+        }
+        merge_outputs(part, into);
     }
-  }
-  std::vector<ModelPrediction> results(tasks.size());
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t k = next++; k < tasks.size(); k = next++)
-      results[k] = run_part(requests[tasks[k].request].first, requests[tasks[k].request].second, tasks[k].windows);
-  };
-  std::vector<std::future<void>> workers;
-  for (unsigned w = 0; w < std::min<std::size_t>(threads_, tasks.size()); ++w)
-    workers.push_back(std::async(std::launch::async, worker));
-  for (auto& w : workers) w.get();
-  // Parts of one windowed run fill disjoint samples: merge them.
-  std::vector<ModelPrediction> out(requests.size());
-  std::vector<bool> seen(requests.size(), false);
-  for (std::size_t k = 0; k < tasks.size(); ++k) {
-    ModelPrediction& into = out[tasks[k].request];
-    ModelPrediction& part = results[k];
-    if (!seen[tasks[k].request]) {
-      into = std::move(part);
-      seen[tasks[k].request] = true;
-      continue;
-    }
-    if (!into.ok) continue;
-    if (!part.ok) {
-      into = std::move(part);
-      continue;
-    }
-    merge_outputs(part, into);
-  }
-  return out;
+    return out;
 }
 
 void merge_outputs(const ModelPrediction& from, ModelPrediction& into) {
-  into.steps += from.steps;
-  for (std::size_t o = 0; o < into.outputs.size() && o < from.outputs.size(); ++o)
-    for (std::size_t i = 0; i < into.outputs[o].size(); ++i)
-      if (!std::isnan(from.outputs[o][i].x())) into.outputs[o][i] = from.outputs[o][i];
+    into.steps += from.steps;
+    for (std::size_t o = 0; o < into.outputs.size() && o < from.outputs.size(); ++o)
+        for (std::size_t i = 0; i < into.outputs[o].size(); ++i)
+            if (!std::isnan(from.outputs[o][i].x())) into.outputs[o][i] = from.outputs[o][i];
 }
 
 }  // namespace scopekin::discrepancy

@@ -10,220 +10,245 @@ namespace {
 
 /// Per residual row, sqrt(n_o) of its output: turns the 1/(sigma sqrt(n)) weighting of
 /// normalised_residuals into plain 1/sigma.
-Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<double>& sigma, SampleSet set) {
-  std::vector<double> s;
-  for (std::size_t o = 0; o < data.outputs.size(); ++o) {
-    if (!assessable(sigma, o)) continue;
-    const MeasuredSeries& m = data.outputs[o];
-    const std::size_t n = samples_in_set(data, m, set);
-    for (std::size_t i = 0; i < n * static_cast<std::size_t>(m.components); ++i) s.push_back(std::sqrt(static_cast<double>(n)));
-  }
-  return Eigen::Map<const Eigen::VectorXd>(s.data(), static_cast<Eigen::Index>(s.size()));
+Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<double>& sigma,
+                            SampleSet set) {
+    std::vector<double> s;
+    for (std::size_t o = 0; o < data.outputs.size(); ++o) {
+        if (!assessable(sigma, o)) continue;
+        const MeasuredSeries& m = data.outputs[o];
+        const std::size_t n = samples_in_set(data, m, set);
+        for (std::size_t i = 0; i < n * static_cast<std::size_t>(m.components); ++i)
+            s.push_back(std::sqrt(static_cast<double>(n)));
+    }
+    return Eigen::Map<const Eigen::VectorXd>(s.data(), static_cast<Eigen::Index>(s.size()));
 }
 
 /// The runs of a forward-difference Jacobian at x: one per parameter, stepped by its `step`
 /// (backwards where that would leave the bounds).
 struct DifferenceRuns {
-  std::vector<nlohmann::json> lists;
-  std::vector<double> h;
+    std::vector<nlohmann::json> lists;
+    std::vector<double> h;
 };
-DifferenceRuns forward_differences(const std::vector<double>& x, const std::vector<FittedParameter>& params,
-                                   const std::function<nlohmann::json(const std::vector<double>&)>& entries) {
-  DifferenceRuns d;
-  for (std::size_t j = 0; j < params.size(); ++j) {
-    std::vector<double> xj = x;
-    d.h.push_back(xj[j] + params[j].step <= params[j].hi ? params[j].step : -params[j].step);
-    xj[j] += d.h.back();
-    d.lists.push_back(entries(xj));
-  }
-  return d;
+DifferenceRuns forward_differences(
+    const std::vector<double>& x, const std::vector<FittedParameter>& params,
+    const std::function<nlohmann::json(const std::vector<double>&)>& entries) {
+    DifferenceRuns d;
+    for (std::size_t j = 0; j < params.size(); ++j) {
+        std::vector<double> xj = x;
+        d.h.push_back(xj[j] + params[j].step <= params[j].hi ? params[j].step : -params[j].step);
+        xj[j] += d.h.back();
+        d.lists.push_back(entries(xj));
+    }
+    return d;
 }
 
 struct Point {
-  std::vector<double> x;
-  ModelPrediction prediction;
-  Eigen::VectorXd r;
-  double cost = std::numeric_limits<double>::infinity();
+    std::vector<double> x;
+    ModelPrediction prediction;
+    Eigen::VectorXd r;
+    double cost = std::numeric_limits<double>::infinity();
 };
 
 /// A point of the fit: parameter values, the model run there and its training residual.
 Point make_point(const DiscrepancyContext& context, std::vector<double> x, ModelPrediction p) {
-  Point pt;
-  pt.x = std::move(x);
-  pt.prediction = std::move(p);
-  if (pt.prediction.ok) {
-    pt.r = context.residuals(pt.prediction, SampleSet::fit_training);
-    pt.cost = pt.r.squaredNorm();
-  }
-  return pt;
+    Point pt;
+    pt.x = std::move(x);
+    pt.prediction = std::move(p);
+    if (pt.prediction.ok) {
+        pt.r = context.residuals(pt.prediction, SampleSet::fit_training);
+        pt.cost = pt.r.squaredNorm();
+    }
+    return pt;
 }
 
 /// The truth_effects entries of a fit's set at values x.
 nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x) {
-  nlohmann::json list = nlohmann::json::array();
-  std::size_t at = 0;
-  for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
-    const Candidate& c = candidate_library()[fit.candidates[k]];
-    const std::vector<double> v(x.begin() + static_cast<std::ptrdiff_t>(at),
-                                x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
-    list.push_back(c.entry(v, fit.held[k]));
-    at += c.parameters.size();
-  }
-  return list;
+    nlohmann::json list = nlohmann::json::array();
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
+        const Candidate& c = candidate_library()[fit.candidates[k]];
+        const std::vector<double> v(
+            x.begin() + static_cast<std::ptrdiff_t>(at),
+            x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
+        list.push_back(c.entry(v, fit.held[k]));
+        at += c.parameters.size();
+    }
+    return list;
 }
 
 std::vector<FittedParameter> parameters_of(const EffectSetFit& fit) {
-  std::vector<FittedParameter> params;
-  for (std::size_t c : fit.candidates)
-    for (const FittedParameter& p : candidate_library()[c].parameters) params.push_back(p);
-  return params;
+    std::vector<FittedParameter> params;
+    for (std::size_t c : fit.candidates)
+        for (const FittedParameter& p : candidate_library()[c].parameters)
+            params.push_back(p);
+    return params;
 }
 
 /// One Levenberg-Marquardt iteration from `current`: the Jacobian (one run per parameter), then
 /// up to three steps, damped more after each that does not lower the cost. Returns whether to
 /// iterate again: not after a failed Jacobian run (`failure` says so), no accepted step, a step
 /// below 1 % of the parameters' steps, or a negligible gain (converged).
-bool iterate(const EffectSetFit& fit, const std::vector<FittedParameter>& params, const DiscrepancyContext& context,
-             Point& current, double& lambda, std::string& failure) {
-  const std::size_t P = params.size();
-  auto entries = [&](const std::vector<double>& x) { return entries_of(fit, x); };
-  // Jacobian columns.
-  const DifferenceRuns differences = forward_differences(current.x, params, entries);
-  const std::vector<double>& h = differences.h;
-  const std::vector<ModelPrediction> columns = context.evaluator.run_all(differences.lists, RunScope::fit_training);
-  Eigen::MatrixXd J(current.r.size(), static_cast<Eigen::Index>(P));
-  for (std::size_t j = 0; j < P; ++j) {
-    if (!columns[j].ok) {
-      failure = "a model run for the Jacobian failed";
-      return false;
-    }
-    J.col(static_cast<Eigen::Index>(j)) = (context.residuals(columns[j], SampleSet::fit_training) - current.r) / h[j];
-  }
-  const Eigen::MatrixXd JtJ = J.transpose() * J;
-  const Eigen::VectorXd g = J.transpose() * current.r;
-  bool accepted = false;
-  bool converged = false;
-  double relative_step = 0.0;
-  for (int attempt = 0; attempt < 3 && !accepted; ++attempt) {
-    Eigen::MatrixXd A = JtJ;
-    for (Eigen::Index k = 0; k < A.rows(); ++k) A(k, k) += lambda * std::max(JtJ(k, k), 1e-12);
-    const Eigen::VectorXd delta = A.ldlt().solve(-g);
-    std::vector<double> x = current.x;
-    relative_step = 0.0;
+bool iterate(const EffectSetFit& fit, const std::vector<FittedParameter>& params,
+             const DiscrepancyContext& context, Point& current, double& lambda,
+             std::string& failure) {
+    const std::size_t P = params.size();
+    auto entries = [&](const std::vector<double>& x) { return entries_of(fit, x); };
+    // Jacobian columns.
+    const DifferenceRuns differences = forward_differences(current.x, params, entries);
+    const std::vector<double>& h = differences.h;
+    const std::vector<ModelPrediction> columns =
+        context.evaluator.run_all(differences.lists, RunScope::fit_training);
+    Eigen::MatrixXd J(current.r.size(), static_cast<Eigen::Index>(P));
     for (std::size_t j = 0; j < P; ++j) {
-      x[j] = std::clamp(x[j] + delta[static_cast<Eigen::Index>(j)], params[j].lo, params[j].hi);
-      relative_step = std::max(relative_step, std::abs(x[j] - current.x[j]) / params[j].step);
+        if (!columns[j].ok) {
+            failure = "a model run for the Jacobian failed";
+            return false;
+        }
+        J.col(static_cast<Eigen::Index>(j)) =
+            (context.residuals(columns[j], SampleSet::fit_training) - current.r) / h[j];
     }
-    Point trial = make_point(context, x, context.evaluator.run(entries(x), RunScope::fit_training));
-    if (trial.cost < current.cost) {
-      const double gain = current.cost - trial.cost;
-      current = std::move(trial);
-      lambda = std::max(lambda / 4.0, 1e-6);
-      accepted = true;
-      converged = gain < 1e-3 * current.cost;
-    } else {
-      lambda *= 8.0;
+    const Eigen::MatrixXd JtJ = J.transpose() * J;
+    const Eigen::VectorXd g = J.transpose() * current.r;
+    bool accepted = false;
+    bool converged = false;
+    double relative_step = 0.0;
+    for (int attempt = 0; attempt < 3 && !accepted; ++attempt) {
+        Eigen::MatrixXd A = JtJ;
+        for (Eigen::Index k = 0; k < A.rows(); ++k)
+            A(k, k) += lambda * std::max(JtJ(k, k), 1e-12);
+        const Eigen::VectorXd delta = A.ldlt().solve(-g);
+        std::vector<double> x = current.x;
+        relative_step = 0.0;
+        for (std::size_t j = 0; j < P; ++j) {
+            x[j] =
+                std::clamp(x[j] + delta[static_cast<Eigen::Index>(j)], params[j].lo, params[j].hi);
+            relative_step = std::max(relative_step, std::abs(x[j] - current.x[j]) / params[j].step);
+        }
+        Point trial =
+            make_point(context, x, context.evaluator.run(entries(x), RunScope::fit_training));
+        if (trial.cost < current.cost) {
+            const double gain = current.cost - trial.cost;
+            current = std::move(trial);
+            lambda = std::max(lambda / 4.0, 1e-6);
+            accepted = true;
+            converged = gain < 1e-3 * current.cost;
+        } else {
+            lambda *= 8.0;
+        }
     }
-  }
-  return accepted && !(relative_step < 0.01) && !converged;
+    return accepted && !(relative_step < 0.01) && !converged;
 }
 
 }  // namespace
 
 double bic_of(const DiscrepancyContext& context, const ModelPrediction& p, std::size_t parameters) {
-  const Eigen::VectorXd r = context.residuals(p, SampleSet::fit_training)
-                                .cwiseProduct(sqrt_counts(context.data, context.sigma, SampleSet::fit_training));
-  const double n = static_cast<double>(std::max<Eigen::Index>(r.size(), 1));
-  return n * std::log(std::max(r.squaredNorm(), 1e-300) / n) + static_cast<double>(parameters) * std::log(n);
+    const Eigen::VectorXd r =
+        context.residuals(p, SampleSet::fit_training)
+            .cwiseProduct(sqrt_counts(context.data, context.sigma, SampleSet::fit_training));
+    const double n = static_cast<double>(std::max<Eigen::Index>(r.size(), 1));
+    return n * std::log(std::max(r.squaredNorm(), 1e-300) / n) +
+           static_cast<double>(parameters) * std::log(n);
 }
 
 std::vector<std::string> names_of(const EffectSetFit& fit) {
-  std::vector<std::string> names;
-  for (std::size_t c : fit.candidates) names.push_back(candidate_library()[c].name);
-  return names;
+    std::vector<std::string> names;
+    for (std::size_t c : fit.candidates)
+        names.push_back(candidate_library()[c].name);
+    return names;
 }
 
 EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const DiscrepancyContext& context,
-                            const std::vector<double>* start, const std::vector<nlohmann::json>* held,
-                            int max_iterations) {
-  const std::vector<Candidate>& library = candidate_library();
-  const Evaluator& evaluator = context.evaluator;
-  EffectSetFit fit;
-  fit.candidates = set;
-  for (std::size_t k = 0; k < set.size(); ++k) {
-    const std::size_t c = set[k];
-    fit.held.push_back(held != nullptr && held->size() == set.size() ? (*held)[k]
-                                                                      : library[c].held(context.data, context.baseline));
-  }
-  const std::vector<FittedParameter> params = parameters_of(fit);
-  const std::size_t P = params.size();
-  std::vector<double> x0;
-  for (const FittedParameter& p : params) x0.push_back(p.neutral);
-  // The neutral point is the baseline itself (the effects vanish there).
-  Point current = make_point(context, x0, context.baseline);
-  if (start != nullptr && start->size() == P && *start != x0) {
-    Point from = make_point(context, *start, evaluator.run(entries_of(fit, *start), RunScope::fit_training));
-    if (from.cost < current.cost) current = std::move(from);
-  }
-  double lambda = 1e-2;
-  for (int it = 0; it < max_iterations; ++it) {
-    fit.iterations = static_cast<std::size_t>(it + 1);
-    if (!iterate(fit, params, context, current, lambda, fit.failure)) break;
-  }
-
-  fit.values = current.x;
-  fit.effects = entries_of(fit, current.x);
-  fit.prediction = current.prediction;
-  fit.ok = current.prediction.ok;
-  if (!fit.ok) {
-    if (fit.failure.empty()) fit.failure = current.prediction.failure;
-    return fit;
-  }
-  if (evaluator.windowed() && current.x != x0) {
-    // The trials ran the training windows only: the held-out windows at the fit.
-    const ModelPrediction held_out = evaluator.run(fit.effects, RunScope::fit_held_out);
-    if (!held_out.ok) {
-      fit.ok = false;
-      fit.failure = held_out.failure;
-      return fit;
+                            const std::vector<double>* start,
+                            const std::vector<nlohmann::json>* held, int max_iterations) {
+    const std::vector<Candidate>& library = candidate_library();
+    const Evaluator& evaluator = context.evaluator;
+    EffectSetFit fit;
+    fit.candidates = set;
+    for (std::size_t k = 0; k < set.size(); ++k) {
+        const std::size_t c = set[k];
+        fit.held.push_back(held != nullptr && held->size() == set.size()
+                               ? (*held)[k]
+                               : library[c].held(context.data, context.baseline));
     }
-    merge_outputs(held_out, fit.prediction);
-  }
-  fit.training_cost = current.cost;
-  fit.held_out_cost = context.residuals(fit.prediction, SampleSet::fit_held_out).squaredNorm();
-  fit.bic = bic_of(context, fit.prediction, P);
-  return fit;
+    const std::vector<FittedParameter> params = parameters_of(fit);
+    const std::size_t P = params.size();
+    std::vector<double> x0;
+    for (const FittedParameter& p : params)
+        x0.push_back(p.neutral);
+    // The neutral point is the baseline itself (the effects vanish there).
+    Point current = make_point(context, x0, context.baseline);
+    if (start != nullptr && start->size() == P && *start != x0) {
+        Point from = make_point(context, *start,
+                                evaluator.run(entries_of(fit, *start), RunScope::fit_training));
+        if (from.cost < current.cost) current = std::move(from);
+    }
+    double lambda = 1e-2;
+    for (int it = 0; it < max_iterations; ++it) {
+        fit.iterations = static_cast<std::size_t>(it + 1);
+        if (!iterate(fit, params, context, current, lambda, fit.failure)) break;
+    }
+
+    fit.values = current.x;
+    fit.effects = entries_of(fit, current.x);
+    fit.prediction = current.prediction;
+    fit.ok = current.prediction.ok;
+    if (!fit.ok) {
+        if (fit.failure.empty()) fit.failure = current.prediction.failure;
+        return fit;
+    }
+    if (evaluator.windowed() && current.x != x0) {
+        // The trials ran the training windows only: the held-out windows at the fit.
+        const ModelPrediction held_out = evaluator.run(fit.effects, RunScope::fit_held_out);
+        if (!held_out.ok) {
+            fit.ok = false;
+            fit.failure = held_out.failure;
+            return fit;
+        }
+        merge_outputs(held_out, fit.prediction);
+    }
+    fit.training_cost = current.cost;
+    fit.held_out_cost = context.residuals(fit.prediction, SampleSet::fit_held_out).squaredNorm();
+    fit.bic = bic_of(context, fit.prediction, P);
+    return fit;
 }
 
 void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
-  const MeasuredRecording& data = context.data;
-  const std::vector<double>& sigma = context.sigma;
-  const std::vector<FittedParameter> params = parameters_of(fit);
-  const std::size_t P = params.size();
-  fit.sd.assign(P, std::numeric_limits<double>::quiet_NaN());
-  if (!fit.ok) return;
-  // One more Jacobian at the fit, in plain 1/sigma weighting.
-  const DifferenceRuns differences =
-      forward_differences(fit.values, params, [&](const std::vector<double>& x) { return entries_of(fit, x); });
-  const std::vector<double>& h = differences.h;
-  const std::vector<ModelPrediction> columns = context.evaluator.run_all(differences.lists, RunScope::fit_training);
-  const Eigen::VectorXd s = sqrt_counts(data, sigma, SampleSet::fit_training);
-  const Eigen::VectorXd r0 = normalised_residuals(data, fit.prediction, sigma, SampleSet::fit_training);
-  const Eigen::VectorXd r = r0.cwiseProduct(s);
-  Eigen::MatrixXd J(r.size(), static_cast<Eigen::Index>(P));
-  for (std::size_t j = 0; j < P; ++j) {
-    if (!columns[j].ok) return;
-    J.col(static_cast<Eigen::Index>(j)) =
-        (normalised_residuals(data, columns[j], sigma, SampleSet::fit_training) - r0).cwiseProduct(s) / h[j];
-  }
-  const double n = static_cast<double>(r.size());
-  double rho = 0.0;
-  if (r.size() > 2) rho = r.head(r.size() - 1).dot(r.tail(r.size() - 1)) / std::max(r.squaredNorm(), 1e-300);
-  rho = std::clamp(rho, 0.0, 0.99);
-  const double s2 = r.squaredNorm() / std::max(1.0, n - static_cast<double>(P)) * (1.0 + rho) / (1.0 - rho);
-  const Eigen::MatrixXd cov = (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse() * s2;
-  for (std::size_t j = 0; j < P; ++j)
-    fit.sd[j] = std::sqrt(std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
+    const MeasuredRecording& data = context.data;
+    const std::vector<double>& sigma = context.sigma;
+    const std::vector<FittedParameter> params = parameters_of(fit);
+    const std::size_t P = params.size();
+    fit.sd.assign(P, std::numeric_limits<double>::quiet_NaN());
+    if (!fit.ok) return;
+    // One more Jacobian at the fit, in plain 1/sigma weighting.
+    const DifferenceRuns differences = forward_differences(
+        fit.values, params, [&](const std::vector<double>& x) { return entries_of(fit, x); });
+    const std::vector<double>& h = differences.h;
+    const std::vector<ModelPrediction> columns =
+        context.evaluator.run_all(differences.lists, RunScope::fit_training);
+    const Eigen::VectorXd s = sqrt_counts(data, sigma, SampleSet::fit_training);
+    const Eigen::VectorXd r0 =
+        normalised_residuals(data, fit.prediction, sigma, SampleSet::fit_training);
+    const Eigen::VectorXd r = r0.cwiseProduct(s);
+    Eigen::MatrixXd J(r.size(), static_cast<Eigen::Index>(P));
+    for (std::size_t j = 0; j < P; ++j) {
+        if (!columns[j].ok) return;
+        J.col(static_cast<Eigen::Index>(j)) =
+            (normalised_residuals(data, columns[j], sigma, SampleSet::fit_training) - r0)
+                .cwiseProduct(s) /
+            h[j];
+    }
+    const double n = static_cast<double>(r.size());
+    double rho = 0.0;
+    if (r.size() > 2)
+        rho = r.head(r.size() - 1).dot(r.tail(r.size() - 1)) / std::max(r.squaredNorm(), 1e-300);
+    rho = std::clamp(rho, 0.0, 0.99);
+    const double s2 =
+        r.squaredNorm() / std::max(1.0, n - static_cast<double>(P)) * (1.0 + rho) / (1.0 - rho);
+    const Eigen::MatrixXd cov =
+        (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse() * s2;
+    for (std::size_t j = 0; j < P; ++j)
+        fit.sd[j] = std::sqrt(
+            std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
 }
 
 }  // namespace scopekin::discrepancy

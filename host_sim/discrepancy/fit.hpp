@@ -21,20 +21,20 @@
 namespace scopekin::discrepancy {
 
 struct EffectSetFit {
-  std::vector<std::size_t> candidates;  ///< indices into candidate_library()
-  std::vector<nlohmann::json> held;     ///< per candidate
-  std::vector<double> values;           ///< fitted parameters, candidates' in order
-  std::vector<double> sd;               ///< their standard deviations
-  nlohmann::json effects = nlohmann::json::array();  ///< truth_effects entries at the fit
-  ModelPrediction prediction;           ///< the model at the fit
-  double training_cost = 0;             ///< |normalised residual|^2 on the training blocks
-  double held_out_cost = 0;             ///< and on the held-out blocks
-  double bic = 0;
-  std::size_t iterations = 0;
-  /// Screening only: the residual's Jacobian w.r.t. the parameters at the neutral point.
-  Eigen::MatrixXd neutral_jacobian;
-  bool ok = false;
-  std::string failure;
+    std::vector<std::size_t> candidates;               ///< indices into candidate_library()
+    std::vector<nlohmann::json> held;                  ///< per candidate
+    std::vector<double> values;                        ///< fitted parameters, candidates' in order
+    std::vector<double> sd;                            ///< their standard deviations
+    nlohmann::json effects = nlohmann::json::array();  ///< truth_effects entries at the fit
+    ModelPrediction prediction;                        ///< the model at the fit
+    double training_cost = 0;  ///< |normalised residual|^2 on the training blocks
+    double held_out_cost = 0;  ///< and on the held-out blocks
+    double bic = 0;
+    std::size_t iterations = 0;
+    /// Screening only: the residual's Jacobian w.r.t. the parameters at the neutral point.
+    Eigen::MatrixXd neutral_jacobian;
+    bool ok = false;
+    std::string failure;
 };
 
 /// Fits the candidates `set` (indices into candidate_library()), starting from the model as
@@ -42,7 +42,8 @@ struct EffectSetFit {
 /// `start`: fitted values to start from instead of the neutral ones (the candidates' parameters
 /// in order); `held`: held parameters to use instead of the candidates' own (one per candidate).
 EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const DiscrepancyContext& context,
-                            const std::vector<double>* start = nullptr, const std::vector<nlohmann::json>* held = nullptr,
+                            const std::vector<double>* start = nullptr,
+                            const std::vector<nlohmann::json>* held = nullptr,
                             int max_iterations = 3);
 
 /// Standard deviations of a fit's parameters (the header's formula; P more runs).

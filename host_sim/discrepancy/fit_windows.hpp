@@ -19,10 +19,10 @@
 namespace scopekin::discrepancy {
 
 struct RunWindow {
-  int block = 0;
-  double start_s = 0;       ///< the restart (recording time)
-  double score_from_s = 0;  ///< the end of the spin-up
-  double end_s = 0;
+    int block = 0;
+    double start_s = 0;       ///< the restart (recording time)
+    double score_from_s = 0;  ///< the end of the spin-up
+    double end_s = 0;
 };
 
 inline constexpr double kSpinUp_s = 3.0;

@@ -22,30 +22,30 @@
 namespace scopekin::discrepancy {
 
 struct ModelPrediction {
-  bool ok = false;
-  std::string failure;                               ///< why the run stopped early (ok = false)
-  /// Per MeasuredRecording::outputs entry, one value per measured sample (same layout).
-  std::vector<std::vector<Eigen::Vector3d>> outputs;
-  /// The model tip's region after each step (index 0 = the start; "" outside the colon).
-  std::vector<std::string> step_region;
-  double t0_s = 0;   ///< recording time of world time 0
-  double h_s = 0.01;
-  std::size_t steps = 0;
-  /// The model tip's region at recording time t.
-  std::string region_at(double time_s) const;
+    bool ok = false;
+    std::string failure;  ///< why the run stopped early (ok = false)
+    /// Per MeasuredRecording::outputs entry, one value per measured sample (same layout).
+    std::vector<std::vector<Eigen::Vector3d>> outputs;
+    /// The model tip's region after each step (index 0 = the start; "" outside the colon).
+    std::vector<std::string> step_region;
+    double t0_s = 0;  ///< recording time of world time 0
+    double h_s = 0.01;
+    std::size_t steps = 0;
+    /// The model tip's region at recording time t.
+    std::string region_at(double time_s) const;
 };
 
 /// The recording's encoder as the hand: step k goes to the insertion and roll read at recording
 /// time t0_s + k h (world time 0 is recording time t0_s).
 class RecordingDrive final : public model::HandCommandSource {
- public:
-  RecordingDrive(const MeasuredRecording& data, double t0_s) : data_(data), t0_s_(t0_s) {}
-  model::HandleCommand command_for_step(std::size_t step, double t_s, double h_s, double depth_now_mm,
-                                        double roll_now_rad) override;
+public:
+    RecordingDrive(const MeasuredRecording& data, double t0_s) : data_(data), t0_s_(t0_s) {}
+    model::HandleCommand command_for_step(std::size_t step, double t_s, double h_s,
+                                          double depth_now_mm, double roll_now_rad) override;
 
- private:
-  const MeasuredRecording& data_;
-  double t0_s_;
+private:
+    const MeasuredRecording& data_;
+    double t0_s_;
 };
 
 /// World time 0 in recording time: the last multiple of h at or before the first encoder sample
@@ -57,7 +57,8 @@ double world_origin_s(const MeasuredRecording& data, double h_s);
 /// at each window's start is saved into `window_states`. Throws model::ModelError for a bad
 /// effect; a run that fails part-way (a failed or unphysical step, judged as for any scenario by
 /// model::run_simulation) returns ok = false.
-ModelPrediction predict(const ModelSpec& model, const nlohmann::json& extra_effects, const MeasuredRecording& data,
+ModelPrediction predict(const ModelSpec& model, const nlohmann::json& extra_effects,
+                        const MeasuredRecording& data,
                         const std::function<void(double)>& progress = {},
                         const std::vector<RunWindow>* windows = nullptr,
                         std::vector<model::World::State>* window_states = nullptr);
@@ -65,7 +66,9 @@ ModelPrediction predict(const ModelSpec& model, const nlohmann::json& extra_effe
 /// Runs only the windows `which` (indices into `windows`), each restarted from its saved state
 /// (fit_windows.hpp). Outputs are NaN outside the windows' scored spans; step_region is empty.
 ModelPrediction predict_windows(const ModelSpec& model, const nlohmann::json& extra_effects,
-                                const MeasuredRecording& data, const std::vector<RunWindow>& windows,
-                                const std::vector<model::World::State>& states, const std::vector<std::size_t>& which);
+                                const MeasuredRecording& data,
+                                const std::vector<RunWindow>& windows,
+                                const std::vector<model::World::State>& states,
+                                const std::vector<std::size_t>& which);
 
 }  // namespace scopekin::discrepancy

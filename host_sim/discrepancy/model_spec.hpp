@@ -13,10 +13,10 @@
 namespace scopekin::discrepancy {
 
 struct ModelSpec {
-  std::string source;                                      ///< names it in messages and the report
-  nlohmann::json document;                                 ///< as given: model.json is written from it
-  model::Scenario scenario;                                ///< read from it: no procedure, no effects
-  nlohmann::json truth_effects = nlohmann::json::array();  ///< its own effects' entries
+    std::string source;        ///< names it in messages and the report
+    nlohmann::json document;   ///< as given: model.json is written from it
+    model::Scenario scenario;  ///< read from it: no procedure, no effects
+    nlohmann::json truth_effects = nlohmann::json::array();  ///< its own effects' entries
 };
 
 /// Reads and checks a model document; throws model::ModelError naming the field under `source`.

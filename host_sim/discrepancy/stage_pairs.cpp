@@ -26,34 +26,38 @@ constexpr double kMinPartnerGain = 0.25;
 /// A pair of screened candidates ranked by the training cost the linearised model predicts for
 /// their joint Gauss-Newton step from the neutral point (no model run).
 struct PairEstimate {
-  std::size_t first = 0, second = 0;  ///< indices into the screened list
-  double linear_training_cost = 0;
-  std::vector<double> step;           ///< the joint step, first's parameters then second's
+    std::size_t first = 0, second = 0;  ///< indices into the screened list
+    double linear_training_cost = 0;
+    std::vector<double> step;  ///< the joint step, first's parameters then second's
 };
 
-std::vector<PairEstimate> rank_pairs_linear(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened) {
-  const Eigen::VectorXd r0 = context.residuals(context.baseline, SampleSet::fit_training);
-  std::vector<PairEstimate> out;
-  for (std::size_t a = 0; a < screened.size(); ++a)
-    for (std::size_t b = a + 1; b < screened.size(); ++b) {
-      const EffectSetFit& fa = screened[a];
-      const EffectSetFit& fb = screened[b];
-      if (fa.neutral_jacobian.cols() == 0 || fb.neutral_jacobian.cols() == 0) continue;
-      Eigen::MatrixXd J(r0.size(), fa.neutral_jacobian.cols() + fb.neutral_jacobian.cols());
-      J << fa.neutral_jacobian, fb.neutral_jacobian;
-      Eigen::MatrixXd A = J.transpose() * J;
-      for (Eigen::Index k = 0; k < A.rows(); ++k) A(k, k) += 1e-9 + 1e-6 * A(k, k);
-      const Eigen::VectorXd delta = A.ldlt().solve(-J.transpose() * r0);
-      PairEstimate e;
-      e.first = a;
-      e.second = b;
-      e.linear_training_cost = (r0 + J * delta).squaredNorm();
-      for (Eigen::Index k = 0; k < delta.size(); ++k) e.step.push_back(delta[k]);
-      out.push_back(e);
-    }
-  std::sort(out.begin(), out.end(),
-            [](const PairEstimate& x, const PairEstimate& y) { return x.linear_training_cost < y.linear_training_cost; });
-  return out;
+std::vector<PairEstimate> rank_pairs_linear(const DiscrepancyContext& context,
+                                            const std::vector<EffectSetFit>& screened) {
+    const Eigen::VectorXd r0 = context.residuals(context.baseline, SampleSet::fit_training);
+    std::vector<PairEstimate> out;
+    for (std::size_t a = 0; a < screened.size(); ++a)
+        for (std::size_t b = a + 1; b < screened.size(); ++b) {
+            const EffectSetFit& fa = screened[a];
+            const EffectSetFit& fb = screened[b];
+            if (fa.neutral_jacobian.cols() == 0 || fb.neutral_jacobian.cols() == 0) continue;
+            Eigen::MatrixXd J(r0.size(), fa.neutral_jacobian.cols() + fb.neutral_jacobian.cols());
+            J << fa.neutral_jacobian, fb.neutral_jacobian;
+            Eigen::MatrixXd A = J.transpose() * J;
+            for (Eigen::Index k = 0; k < A.rows(); ++k)
+                A(k, k) += 1e-9 + 1e-6 * A(k, k);
+            const Eigen::VectorXd delta = A.ldlt().solve(-J.transpose() * r0);
+            PairEstimate e;
+            e.first = a;
+            e.second = b;
+            e.linear_training_cost = (r0 + J * delta).squaredNorm();
+            for (Eigen::Index k = 0; k < delta.size(); ++k)
+                e.step.push_back(delta[k]);
+            out.push_back(e);
+        }
+    std::sort(out.begin(), out.end(), [](const PairEstimate& x, const PairEstimate& y) {
+        return x.linear_training_cost < y.linear_training_cost;
+    });
+    return out;
 }
 
 /// Would a second effect help a fitted single one? A score test without runs: for each other
@@ -63,178 +67,194 @@ std::vector<PairEstimate> rank_pairs_linear(const DiscrepancyContext& context, c
 /// `noise_floor_cost`, what noise alone gives), 0 when there is no excess.
 double best_partner_gain(const DiscrepancyContext& context, const EffectSetFit& single,
                          const std::vector<EffectSetFit>& screened, double noise_floor_cost) {
-  if (!single.ok) return 0.0;
-  const Eigen::VectorXd r = context.residuals(single.prediction, SampleSet::fit_training);
-  const double cost = r.squaredNorm();
-  const double excess = cost - noise_floor_cost;
-  if (!(excess > 0.0)) return 0.0;
-  double best = 0.0;
-  for (const EffectSetFit& other : screened) {
-    if (other.candidates == single.candidates || other.neutral_jacobian.rows() != r.size()) continue;
-    const Eigen::MatrixXd& J = other.neutral_jacobian;
-    Eigen::MatrixXd A = J.transpose() * J;
-    for (Eigen::Index k = 0; k < A.rows(); ++k) A(k, k) += 1e-9 + 1e-6 * A(k, k);
-    const Eigen::VectorXd delta = A.ldlt().solve(-J.transpose() * r);
-    best = std::max(best, (cost - (r + J * delta).squaredNorm()) / excess);
-  }
-  return best;
+    if (!single.ok) return 0.0;
+    const Eigen::VectorXd r = context.residuals(single.prediction, SampleSet::fit_training);
+    const double cost = r.squaredNorm();
+    const double excess = cost - noise_floor_cost;
+    if (!(excess > 0.0)) return 0.0;
+    double best = 0.0;
+    for (const EffectSetFit& other : screened) {
+        if (other.candidates == single.candidates || other.neutral_jacobian.rows() != r.size())
+            continue;
+        const Eigen::MatrixXd& J = other.neutral_jacobian;
+        Eigen::MatrixXd A = J.transpose() * J;
+        for (Eigen::Index k = 0; k < A.rows(); ++k)
+            A(k, k) += 1e-9 + 1e-6 * A(k, k);
+        const Eigen::VectorXd delta = A.ldlt().solve(-J.transpose() * r);
+        best = std::max(best, (cost - (r + J * delta).squaredNorm()) / excess);
+    }
+    return best;
 }
 
 /// Does a fit leave every assessed output within `significance` times its noise (held-out windows)?
 bool leaves_nothing_significant(const DiscrepancyContext& context, const EffectSetFit& f) {
-  const MeasuredRecording& data = context.data;
-  for (std::size_t o = 0; o < data.outputs.size(); ++o)
-    if (assessable(context.sigma, o) &&
-        rms_error(data, f.prediction, o, SampleSet::fit_held_out) / context.sigma[o] > context.options.significance)
-      return false;
-  return true;
+    const MeasuredRecording& data = context.data;
+    for (std::size_t o = 0; o < data.outputs.size(); ++o)
+        if (assessable(context.sigma, o) &&
+            rms_error(data, f.prediction, o, SampleSet::fit_held_out) / context.sigma[o] >
+                context.options.significance)
+            return false;
+    return true;
 }
 
 /// The training cost of noise alone: 1 per assessed output with training samples.
 double training_noise_floor(const DiscrepancyContext& context) {
-  const MeasuredRecording& data = context.data;
-  double floor_training = 0.0;
-  for (std::size_t o = 0; o < data.outputs.size(); ++o)
-    floor_training += assessable(context.sigma, o) && samples_in_set(data, data.outputs[o], SampleSet::fit_training) > 0
-                          ? 1.0
-                          : 0.0;
-  return floor_training;
+    const MeasuredRecording& data = context.data;
+    double floor_training = 0.0;
+    for (std::size_t o = 0; o < data.outputs.size(); ++o)
+        floor_training += assessable(context.sigma, o) &&
+                                  samples_in_set(data, data.outputs[o], SampleSet::fit_training) > 0
+                              ? 1.0
+                              : 0.0;
+    return floor_training;
 }
 
 /// The best kPairs pairs by their linearised joint step (no run), fitted side by side: each fit's
 /// batches of runs leave threads idle that the other's fill.
-std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened,
-                                    StageLog& stages) {
-  const std::vector<PairEstimate> ranked = rank_pairs_linear(context, screened);
-  const std::size_t pair_count = std::min(kPairs, ranked.size());
-  std::string names;
-  for (std::size_t k = 0; k < pair_count; ++k)
-    names += (k > 0 ? ", " : "") + candidate_library()[screened[ranked[k].first].candidates[0]].name + " + " +
-             candidate_library()[screened[ranked[k].second].candidates[0]].name;
-  stages.start("fitting " + names, (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
-  std::vector<std::future<EffectSetFit>> pair_fits;
-  for (std::size_t k = 0; k < pair_count; ++k) {
-    const EffectSetFit& fa = screened[ranked[k].first];
-    const EffectSetFit& fb = screened[ranked[k].second];
-    std::vector<double> start;
-    std::vector<nlohmann::json> held{fa.held[0], fb.held[0]};
-    std::size_t at = 0;
-    for (const EffectSetFit* f : {&fa, &fb}) {
-      const std::vector<FittedParameter>& params = candidate_library()[f->candidates[0]].parameters;
-      for (std::size_t j = 0; j < params.size(); ++j, ++at) {
-        // Sigmoid mobility's angles come from its screening, not from the linear step.
-        const bool angle = params[j].key.rfind("direction_", 0) == 0;
-        const double value = angle ? f->values[j] : params[j].neutral + ranked[k].step[at];
-        start.push_back(std::clamp(value, params[j].lo, params[j].hi));
-      }
+std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
+                                    const std::vector<EffectSetFit>& screened, StageLog& stages) {
+    const std::vector<PairEstimate> ranked = rank_pairs_linear(context, screened);
+    const std::size_t pair_count = std::min(kPairs, ranked.size());
+    std::string names;
+    for (std::size_t k = 0; k < pair_count; ++k)
+        names += (k > 0 ? ", " : "") +
+                 candidate_library()[screened[ranked[k].first].candidates[0]].name + " + " +
+                 candidate_library()[screened[ranked[k].second].candidates[0]].name;
+    stages.start("fitting " + names, (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
+    std::vector<std::future<EffectSetFit>> pair_fits;
+    for (std::size_t k = 0; k < pair_count; ++k) {
+        const EffectSetFit& fa = screened[ranked[k].first];
+        const EffectSetFit& fb = screened[ranked[k].second];
+        std::vector<double> start;
+        std::vector<nlohmann::json> held{fa.held[0], fb.held[0]};
+        std::size_t at = 0;
+        for (const EffectSetFit* f : {&fa, &fb}) {
+            const std::vector<FittedParameter>& params =
+                candidate_library()[f->candidates[0]].parameters;
+            for (std::size_t j = 0; j < params.size(); ++j, ++at) {
+                // Sigmoid mobility's angles come from its screening, not from the linear step.
+                const bool angle = params[j].key.rfind("direction_", 0) == 0;
+                const double value = angle ? f->values[j] : params[j].neutral + ranked[k].step[at];
+                start.push_back(std::clamp(value, params[j].lo, params[j].hi));
+            }
+        }
+        const std::vector<std::size_t> set{fa.candidates[0], fb.candidates[0]};
+        // On windows (a long recording) two iterations: the start, the linearised joint step, is
+        // close already, and the budget is the point of the windows.
+        const int iterations = context.evaluator.windowed() ? 2 : 3;
+        pair_fits.push_back(
+            std::async(std::launch::async, [&context, set, start, held, iterations] {
+                return fit_effect_set(set, context, &start, &held, iterations);
+            }));
     }
-    const std::vector<std::size_t> set{fa.candidates[0], fb.candidates[0]};
-    // On windows (a long recording) two iterations: the start, the linearised joint step, is
-    // close already, and the budget is the point of the windows.
-    const int iterations = context.evaluator.windowed() ? 2 : 3;
-    pair_fits.push_back(std::async(std::launch::async, [&context, set, start, held, iterations] {
-      return fit_effect_set(set, context, &start, &held, iterations);
-    }));
-  }
-  std::vector<EffectSetFit> pairs;
-  for (auto& f : pair_fits) pairs.push_back(f.get());
-  return pairs;
+    std::vector<EffectSetFit> pairs;
+    for (auto& f : pair_fits)
+        pairs.push_back(f.get());
+    return pairs;
 }
 
 /// A pair whose member stayed at its neutral values is that member's partner alone (the neutral
 /// effect changes nothing): it competes as a single effect.
 void demote_neutral_members(const DiscrepancyContext& context, std::vector<EffectSetFit>& pairs) {
-  for (EffectSetFit& p : pairs) {
-    if (!p.ok) continue;
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < 2; ++k) {
-      const Candidate& c = candidate_library()[p.candidates[k]];
-      bool neutral = true;
-      for (std::size_t j = 0; j < c.parameters.size(); ++j)
-        if (c.parameters[j].key.rfind("direction_", 0) != 0 &&
-            std::abs(p.values[at + j] - c.parameters[j].neutral) > 0.5 * c.parameters[j].step)
-          neutral = false;
-      if (neutral) {
-        const std::size_t other = 1 - k;
-        const std::size_t other_at = other == 0 ? 0 : candidate_library()[p.candidates[0]].parameters.size();
-        const std::size_t n = candidate_library()[p.candidates[other]].parameters.size();
-        EffectSetFit single;
-        single.candidates = {p.candidates[other]};
-        single.held = {p.held[other]};
-        single.values.assign(p.values.begin() + static_cast<std::ptrdiff_t>(other_at),
-                             p.values.begin() + static_cast<std::ptrdiff_t>(other_at + n));
-        single.effects = nlohmann::json::array({p.effects[other]});
-        single.prediction = p.prediction;
-        single.training_cost = p.training_cost;
-        single.held_out_cost = p.held_out_cost;
-        single.bic = bic_of(context, p.prediction, n);
-        single.iterations = p.iterations;
-        single.ok = true;
-        p = std::move(single);
-        break;
-      }
-      at += c.parameters.size();
+    for (EffectSetFit& p : pairs) {
+        if (!p.ok) continue;
+        std::size_t at = 0;
+        for (std::size_t k = 0; k < 2; ++k) {
+            const Candidate& c = candidate_library()[p.candidates[k]];
+            bool neutral = true;
+            for (std::size_t j = 0; j < c.parameters.size(); ++j)
+                if (c.parameters[j].key.rfind("direction_", 0) != 0 &&
+                    std::abs(p.values[at + j] - c.parameters[j].neutral) >
+                        0.5 * c.parameters[j].step)
+                    neutral = false;
+            if (neutral) {
+                const std::size_t other = 1 - k;
+                const std::size_t other_at =
+                    other == 0 ? 0 : candidate_library()[p.candidates[0]].parameters.size();
+                const std::size_t n = candidate_library()[p.candidates[other]].parameters.size();
+                EffectSetFit single;
+                single.candidates = {p.candidates[other]};
+                single.held = {p.held[other]};
+                single.values.assign(p.values.begin() + static_cast<std::ptrdiff_t>(other_at),
+                                     p.values.begin() + static_cast<std::ptrdiff_t>(other_at + n));
+                single.effects = nlohmann::json::array({p.effects[other]});
+                single.prediction = p.prediction;
+                single.training_cost = p.training_cost;
+                single.held_out_cost = p.held_out_cost;
+                single.bic = bic_of(context, p.prediction, n);
+                single.iterations = p.iterations;
+                single.ok = true;
+                p = std::move(single);
+                break;
+            }
+            at += c.parameters.size();
+        }
     }
-  }
 }
 
 /// The pairs joined to the candidates: singles that came out of pairs replace the same effect's
 /// fit where they are better; the rest ranked. Returns the index of the set to name, if any.
-std::optional<std::size_t> join_pairs(const DiscrepancyContext& context, std::vector<EffectSetFit> pairs,
+std::optional<std::size_t> join_pairs(const DiscrepancyContext& context,
+                                      std::vector<EffectSetFit> pairs,
                                       std::vector<EffectSetFit>& candidates) {
-  for (auto it = pairs.begin(); it != pairs.end();) {
-    if (it->candidates.size() == 1) {
-      for (EffectSetFit& f : candidates)
-        if (f.candidates == it->candidates && it->held_out_cost < f.held_out_cost) f = *it;
-      it = pairs.erase(it);
-    } else {
-      ++it;
+    for (auto it = pairs.begin(); it != pairs.end();) {
+        if (it->candidates.size() == 1) {
+            for (EffectSetFit& f : candidates)
+                if (f.candidates == it->candidates && it->held_out_cost < f.held_out_cost) f = *it;
+            it = pairs.erase(it);
+        } else {
+            ++it;
+        }
     }
-  }
-  std::sort(candidates.begin(), candidates.end(), by_held_out);
-  prefer_simpler(context, candidates);
-  std::sort(pairs.begin(), pairs.end(), by_held_out);
-  const double min_share = context.options.min_share;
-  const bool single_now_explains = share_of(context, candidates.front()) >= min_share;
-  const EffectSetFit& single = candidates.front();
-  const bool pair_better = !pairs.empty() && share_of(context, pairs.front()) >= min_share &&
-                           pairs.front().bic < single.bic &&
-                           share_of(context, pairs.front()) - share_of(context, single) >= kPairGain;
-  // The list: the pairs (best first) ahead of the singles if the best pair is named, else after
-  // them; the named set leads.
-  if (pair_better) {
-    candidates.insert(candidates.begin(), std::make_move_iterator(pairs.begin()), std::make_move_iterator(pairs.end()));
-    return 0;
-  }
-  for (EffectSetFit& p : pairs) candidates.push_back(std::move(p));
-  if (single_now_explains) return 0;
-  return std::nullopt;
+    std::sort(candidates.begin(), candidates.end(), by_held_out);
+    prefer_simpler(context, candidates);
+    std::sort(pairs.begin(), pairs.end(), by_held_out);
+    const double min_share = context.options.min_share;
+    const bool single_now_explains = share_of(context, candidates.front()) >= min_share;
+    const EffectSetFit& single = candidates.front();
+    const bool pair_better =
+        !pairs.empty() && share_of(context, pairs.front()) >= min_share &&
+        pairs.front().bic < single.bic &&
+        share_of(context, pairs.front()) - share_of(context, single) >= kPairGain;
+    // The list: the pairs (best first) ahead of the singles if the best pair is named, else after
+    // them; the named set leads.
+    if (pair_better) {
+        candidates.insert(candidates.begin(), std::make_move_iterator(pairs.begin()),
+                          std::make_move_iterator(pairs.end()));
+        return 0;
+    }
+    for (EffectSetFit& p : pairs)
+        candidates.push_back(std::move(p));
+    if (single_now_explains) return 0;
+    return std::nullopt;
 }
 
 }  // namespace
 
 PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened,
                        std::vector<EffectSetFit>& candidates, StageLog& stages) {
-  PairsOutcome out;
-  // The best single effect leads the ranked candidates.
-  const EffectSetFit& best = candidates.front();
-  const bool single_explains = share_of(context, best) >= context.options.min_share;
-  double partner_gain = 0.0;
-  if (single_explains && !leaves_nothing_significant(context, best)) {
-    partner_gain = best_partner_gain(context, best, screened, training_noise_floor(context));
-    out.pair_test = {{"why", "the best single effect explains enough but leaves an output significant"},
-                     {"best_partner_gain", partner_gain},
-                     {"threshold", kMinPartnerGain},
-                     {"pairs_tried", partner_gain >= kMinPartnerGain}};
-  }
-  if (single_explains && (leaves_nothing_significant(context, best) || partner_gain < kMinPartnerGain)) {
-    out.chosen = 0;
-  } else if (share_of(context, best) >= kMinSingleShareForPairs) {
-    std::vector<EffectSetFit> pairs = fit_pairs(context, screened, stages);
-    demote_neutral_members(context, pairs);
-    out.chosen = join_pairs(context, std::move(pairs), candidates);
-  }
-  return out;
+    PairsOutcome out;
+    // The best single effect leads the ranked candidates.
+    const EffectSetFit& best = candidates.front();
+    const bool single_explains = share_of(context, best) >= context.options.min_share;
+    double partner_gain = 0.0;
+    if (single_explains && !leaves_nothing_significant(context, best)) {
+        partner_gain = best_partner_gain(context, best, screened, training_noise_floor(context));
+        out.pair_test = {
+            {"why", "the best single effect explains enough but leaves an output significant"},
+            {"best_partner_gain", partner_gain},
+            {"threshold", kMinPartnerGain},
+            {"pairs_tried", partner_gain >= kMinPartnerGain}};
+    }
+    if (single_explains &&
+        (leaves_nothing_significant(context, best) || partner_gain < kMinPartnerGain)) {
+        out.chosen = 0;
+    } else if (share_of(context, best) >= kMinSingleShareForPairs) {
+        std::vector<EffectSetFit> pairs = fit_pairs(context, screened, stages);
+        demote_neutral_members(context, pairs);
+        out.chosen = join_pairs(context, std::move(pairs), candidates);
+    }
+    return out;
 }
 
 }  // namespace scopekin::discrepancy

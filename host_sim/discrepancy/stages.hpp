@@ -27,23 +27,25 @@ inline constexpr std::size_t kRefined = 2;
 inline constexpr double kProgressSteps = static_cast<double>(kRefined + 5);
 
 struct Significance {
-  nlohmann::ordered_json outputs = nlohmann::ordered_json::object();  ///< per output (report.json "significance")
-  std::size_t most_affected = 0;  ///< the assessed output with the largest held-out RMS error over its noise
-  bool any = false;               ///< an output's ratio exceeds the options' significance
+    nlohmann::ordered_json outputs =
+        nlohmann::ordered_json::object();  ///< per output (report.json "significance")
+    std::size_t most_affected =
+        0;             ///< the assessed output with the largest held-out RMS error over its noise
+    bool any = false;  ///< an output's ratio exceeds the options' significance
 };
 
 struct Verdict {
-  std::string verdict = "none";           ///< none, named or unexplained
-  std::optional<std::size_t> named;       ///< index into the candidates of the effects named
-  nlohmann::ordered_json confirmation;    ///< fitted on windows: the named effects' full run
+    std::string verdict = "none";         ///< none, named or unexplained
+    std::optional<std::size_t> named;     ///< index into the candidates of the effects named
+    nlohmann::ordered_json confirmation;  ///< fitted on windows: the named effects' full run
 };
 
 /// What the stages found.
 struct Findings {
-  Significance significance;
-  std::vector<EffectSetFit> candidates;   ///< every fit, best first (held-out cost)
-  nlohmann::ordered_json pair_test;       ///< the score test before pairs (when it ran)
-  Verdict verdict;
+    Significance significance;
+    std::vector<EffectSetFit> candidates;  ///< every fit, best first (held-out cost)
+    nlohmann::ordered_json pair_test;      ///< the score test before pairs (when it ran)
+    Verdict verdict;
 };
 
 /// Significance: each output's held-out RMS error against its noise.
@@ -58,11 +60,12 @@ std::vector<EffectSetFit> screen_candidates(const DiscrepancyContext& context);
 /// refined ones explain too little, or when its screening step came close. Returns every fit,
 /// ranked (by_held_out, prefer_simpler).
 std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
-                                            const std::vector<EffectSetFit>& screened, StageLog& stages);
+                                            const std::vector<EffectSetFit>& screened,
+                                            StageLog& stages);
 
 struct PairsOutcome {
-  std::optional<std::size_t> chosen;  ///< index into the candidates of the set to name, if any
-  nlohmann::ordered_json pair_test;   ///< the score test (when it ran)
+    std::optional<std::size_t> chosen;  ///< index into the candidates of the set to name, if any
+    nlohmann::ordered_json pair_test;   ///< the score test (when it ran)
 };
 /// Pairs: names the best single effect when it explains enough and leaves nothing that a partner
 /// is predicted to remove; otherwise, if it explains at least a little, fits the two pairs best

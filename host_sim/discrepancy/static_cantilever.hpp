@@ -20,20 +20,21 @@
 namespace scopekin::discrepancy {
 
 struct CantileverCandidate {
-  std::string name;
-  std::vector<std::string> parameters;  ///< fitted, in order
-  std::vector<double> values;           ///< fitted on all nine points (EI in N mm^2 at App. B's weight; pitch deg)
-  double rms_all_mm = 0;                ///< fit to all points
-  double rms_held_out_mm = 0;           ///< leave-one-point-out
-  double bic = 0;                       ///< on all points (18 coordinates)
-  int solves = 0;
+    std::string name;
+    std::vector<std::string> parameters;  ///< fitted, in order
+    std::vector<double>
+        values;  ///< fitted on all nine points (EI in N mm^2 at App. B's weight; pitch deg)
+    double rms_all_mm = 0;       ///< fit to all points
+    double rms_held_out_mm = 0;  ///< leave-one-point-out
+    double bic = 0;              ///< on all points (18 coordinates)
+    int solves = 0;
 };
 
 struct CantileverReport {
-  double rms_as_given_mm = 0;
-  std::vector<CantileverCandidate> candidates;  ///< best held-out first
-  nlohmann::ordered_json json;                  ///< report.json
-  std::string markdown;                         ///< report.md
+    double rms_as_given_mm = 0;
+    std::vector<CantileverCandidate> candidates;  ///< best held-out first
+    nlohmann::ordered_json json;                  ///< report.json
+    std::string markdown;                         ///< report.md
 };
 
 CantileverReport run_thesis_cantilever();

@@ -29,11 +29,11 @@
 namespace scopekin::discrepancy {
 
 struct WorkflowResult {
-  nlohmann::ordered_json report;        ///< report.json
-  nlohmann::json model;                 ///< model.json: the input model with the named effects added
-  ModelPrediction before;               ///< the model as given
-  ModelPrediction after;                ///< with the named effects (= before unless named)
-  std::vector<EffectSetFit> candidates; ///< every fit, best first (held-out cost)
+    nlohmann::ordered_json report;  ///< report.json
+    nlohmann::json model;           ///< model.json: the input model with the named effects added
+    ModelPrediction before;         ///< the model as given
+    ModelPrediction after;          ///< with the named effects (= before unless named)
+    std::vector<EffectSetFit> candidates;  ///< every fit, best first (held-out cost)
 };
 
 /// Throws model::ModelError for a model that cannot be built; a model that cannot follow the

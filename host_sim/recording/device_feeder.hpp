@@ -29,41 +29,45 @@
 namespace scopekin::recording {
 
 struct DeviceFeederCounters {
-  std::uint64_t rows = 0;                        ///< feed() calls
-  std::uint64_t handle_force_torque_frames = 0;  ///< 0x110 frames sent
-  std::uint64_t insertion_roll_frames = 0;       ///< 0x111 frames sent
-  std::uint64_t can_send_failures = 0;           ///< send() did not return ok (frame not sent, counter kept)
-  std::array<std::uint64_t, kEmSlotCount> em_pose_frames{};  ///< by wire sensor id
-  std::uint64_t tip_force_frames = 0;
-  std::uint64_t serial_bytes_written = 0;        ///< bytes the line took
-  std::uint64_t serial_bytes_lost = 0;           ///< bytes the line could not take (full buffer)
-  std::uint64_t serial_frames_without_port = 0;  ///< EM / tip force samples with no serial sink set
+    std::uint64_t rows = 0;                        ///< feed() calls
+    std::uint64_t handle_force_torque_frames = 0;  ///< 0x110 frames sent
+    std::uint64_t insertion_roll_frames = 0;       ///< 0x111 frames sent
+    std::uint64_t can_send_failures =
+        0;  ///< send() did not return ok (frame not sent, counter kept)
+    std::array<std::uint64_t, kEmSlotCount> em_pose_frames{};  ///< by wire sensor id
+    std::uint64_t tip_force_frames = 0;
+    std::uint64_t serial_bytes_written = 0;  ///< bytes the line took
+    std::uint64_t serial_bytes_lost = 0;     ///< bytes the line could not take (full buffer)
+    std::uint64_t serial_frames_without_port =
+        0;  ///< EM / tip force samples with no serial sink set
 };
 
 class DeviceFeeder {
- public:
-  /// The device side of a serial line: writes bytes, returns how many the line took.
-  using SerialSink = std::function<std::size_t(std::span<const std::uint8_t>)>;
+public:
+    /// The device side of a serial line: writes bytes, returns how many the line took.
+    using SerialSink = std::function<std::size_t(std::span<const std::uint8_t>)>;
 
-  /// `serial` may be empty: EM and tip force cells are then counted as serial_frames_without_port.
-  explicit DeviceFeeder(hal::CanBus& can, SerialSink serial = {}, hal::SimulatedClock* clock = nullptr);
-  /// Writes the serial frames with port.device_write.
-  DeviceFeeder(hal::CanBus& can, hal::LoopbackSerialPort& port, hal::SimulatedClock* clock = nullptr);
+    /// `serial` may be empty: EM and tip force cells are then counted as serial_frames_without_port.
+    explicit DeviceFeeder(hal::CanBus& can, SerialSink serial = {},
+                          hal::SimulatedClock* clock = nullptr);
+    /// Writes the serial frames with port.device_write.
+    DeviceFeeder(hal::CanBus& can, hal::LoopbackSerialPort& port,
+                 hal::SimulatedClock* clock = nullptr);
 
-  /// Sends everything `row` carries.
-  void feed(const RecordingRow& row);
+    /// Sends everything `row` carries.
+    void feed(const RecordingRow& row);
 
-  [[nodiscard]] const DeviceFeederCounters& counters() const { return counters_; }
+    [[nodiscard]] const DeviceFeederCounters& counters() const { return counters_; }
 
- private:
-  void write_serial(std::span<const std::uint8_t> bytes);
+private:
+    void write_serial(std::span<const std::uint8_t> bytes);
 
-  hal::CanBus& can_;
-  SerialSink serial_;
-  hal::SimulatedClock* clock_;
-  std::uint8_t force_torque_counter_ = 0;
-  std::uint8_t insertion_roll_counter_ = 0;
-  DeviceFeederCounters counters_{};
+    hal::CanBus& can_;
+    SerialSink serial_;
+    hal::SimulatedClock* clock_;
+    std::uint8_t force_torque_counter_ = 0;
+    std::uint8_t insertion_roll_counter_ = 0;
+    DeviceFeederCounters counters_{};
 };
 
 }  // namespace scopekin::recording

@@ -29,20 +29,20 @@ std::string recording_header();
 /// force limits the serial receiver's defaults (em_tracker_serial.md §3).  A value is inside when
 /// it is inside once rounded to its wire resolution (within half a step of the limit).
 struct RecordingLimits {
-  static constexpr double force_min_N = -163.84, force_max_N = 163.835;
-  static constexpr double torque_min_Nmm = -3276.8, torque_max_Nmm = 3276.7;
-  static constexpr double insertion_min_mm = -50.0, insertion_max_mm = 2500.0;
-  static constexpr double roll_min_rad = -838.8608, roll_max_rad = 838.8607;
-  static constexpr double position_max_abs_mm = 1000.0;
-  static constexpr double quaternion_norm_tolerance = 1e-3;  ///< | |q| - 1 | must be below this
-  static constexpr double tip_force_max_abs_N = 25.0;
-  static constexpr std::int64_t time_max_us = 1'000'000'000'000'000;  ///< 10^9 s: 31 years
+    static constexpr double force_min_N = -163.84, force_max_N = 163.835;
+    static constexpr double torque_min_Nmm = -3276.8, torque_max_Nmm = 3276.7;
+    static constexpr double insertion_min_mm = -50.0, insertion_max_mm = 2500.0;
+    static constexpr double roll_min_rad = -838.8608, roll_max_rad = 838.8607;
+    static constexpr double position_max_abs_mm = 1000.0;
+    static constexpr double quaternion_norm_tolerance = 1e-3;  ///< | |q| - 1 | must be below this
+    static constexpr double tip_force_max_abs_N = 25.0;
+    static constexpr std::int64_t time_max_us = 1'000'000'000'000'000;  ///< 10^9 s: 31 years
 };
 
 /// A problem with one cell of a row: the column and what is wrong (no line number).
 struct CellProblem {
-  std::string column;
-  std::string message;
+    std::string column;
+    std::string message;
 };
 /// The first value of `row` that is not finite or outside RecordingLimits, or a region that is
 /// not a colon region name; nullopt if the row is fine.  Time is not checked here.
@@ -63,19 +63,19 @@ std::string format_time_s(std::int64_t time_us);
 /// the previous row's.  Extra columns (names starting with "x_", for humans and other tools) go
 /// after the schema's columns; their cells must not contain a comma, quote or line break.
 class RecordingWriter {
- public:
-  explicit RecordingWriter(std::ostream& out, std::vector<std::string> extra_columns = {});
-  void write(const RecordingRow& row);
-  void write(const RecordingRow& row, const std::vector<std::string>& extra_cells);
-  [[nodiscard]] std::size_t rows_written() const { return rows_written_; }
-  /// The line the next row goes to (the header is line 1).
-  [[nodiscard]] std::size_t next_line() const { return rows_written_ + 2; }
+public:
+    explicit RecordingWriter(std::ostream& out, std::vector<std::string> extra_columns = {});
+    void write(const RecordingRow& row);
+    void write(const RecordingRow& row, const std::vector<std::string>& extra_cells);
+    [[nodiscard]] std::size_t rows_written() const { return rows_written_; }
+    /// The line the next row goes to (the header is line 1).
+    [[nodiscard]] std::size_t next_line() const { return rows_written_ + 2; }
 
- private:
-  std::ostream& out_;
-  std::vector<std::string> extra_columns_;
-  std::size_t rows_written_ = 0;
-  std::optional<std::int64_t> last_time_us_;
+private:
+    std::ostream& out_;
+    std::vector<std::string> extra_columns_;
+    std::size_t rows_written_ = 0;
+    std::optional<std::int64_t> last_time_us_;
 };
 
 }  // namespace scopekin::recording

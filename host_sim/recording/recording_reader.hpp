@@ -14,11 +14,11 @@ namespace scopekin::recording {
 /// A stretch of time in which a handle signal delivered nothing: from the last sample before it
 /// (or the first row's time) to the next sample (or the last row's time).
 struct RecordingGap {
-  double start_s = 0;
-  double end_s = 0;
-  std::string signal;  ///< "handle_force_torque" or "insertion_roll"
-  [[nodiscard]] double duration_s() const { return end_s - start_s; }
-  friend bool operator==(const RecordingGap&, const RecordingGap&) = default;
+    double start_s = 0;
+    double end_s = 0;
+    std::string signal;  ///< "handle_force_torque" or "insertion_roll"
+    [[nodiscard]] double duration_s() const { return end_s - start_s; }
+    friend bool operator==(const RecordingGap&, const RecordingGap&) = default;
 };
 
 /// Gaps longer than `threshold_s` (strictly) in the handle force/torque and the insertion/roll
@@ -27,28 +27,28 @@ struct RecordingGap {
 std::vector<RecordingGap> find_gaps(const std::vector<RecordingRow>& rows, double threshold_s);
 
 struct Recording {
-  std::vector<RecordingRow> rows;
-  std::vector<std::size_t> row_lines;              ///< the line each row came from
-  std::vector<std::string> extra_columns;          ///< the x_ columns, in file order
-  std::vector<std::vector<std::string>> extra_cells;  ///< per row, one cell per extra column
-  std::vector<RecordingGap> gaps;                  ///< findings (RecordingReaderOptions::gap_threshold_s)
+    std::vector<RecordingRow> rows;
+    std::vector<std::size_t> row_lines;                 ///< the line each row came from
+    std::vector<std::string> extra_columns;             ///< the x_ columns, in file order
+    std::vector<std::vector<std::string>> extra_cells;  ///< per row, one cell per extra column
+    std::vector<RecordingGap> gaps;  ///< findings (RecordingReaderOptions::gap_threshold_s)
 };
 
 struct RecordingReaderOptions {
-  double gap_threshold_s = 0.05;  ///< a handle signal silent for longer than this is a gap
+    double gap_threshold_s = 0.05;  ///< a handle signal silent for longer than this is a gap
 };
 
 class RecordingReader {
- public:
-  explicit RecordingReader(RecordingReaderOptions options = {});
+public:
+    explicit RecordingReader(RecordingReaderOptions options = {});
 
-  /// Reads a file; errors are prefixed with the file name ("run.csv: line 3, column ...").
-  [[nodiscard]] Recording read_file(const std::string& path) const;
-  /// Reads a stream; `source` (if not empty) prefixes every error message.
-  [[nodiscard]] Recording read(std::istream& in, const std::string& source = "") const;
+    /// Reads a file; errors are prefixed with the file name ("run.csv: line 3, column ...").
+    [[nodiscard]] Recording read_file(const std::string& path) const;
+    /// Reads a stream; `source` (if not empty) prefixes every error message.
+    [[nodiscard]] Recording read(std::istream& in, const std::string& source = "") const;
 
- private:
-  RecordingReaderOptions options_;
+private:
+    RecordingReaderOptions options_;
 };
 
 }  // namespace scopekin::recording

@@ -55,12 +55,15 @@ namespace scopekin::recording::wire {
 [[nodiscard]] const protocol::CanSignal& roll_signal();
 
 /// Status 0 (valid), the given 4-bit counter.
-[[nodiscard]] protocol::HandleForceTorque to_handle_force_torque(const ForceTorqueCells& cells, std::uint8_t counter);
-[[nodiscard]] protocol::InsertionRoll to_insertion_roll(const InsertionRollCells& cells, std::uint8_t counter);
+[[nodiscard]] protocol::HandleForceTorque to_handle_force_torque(const ForceTorqueCells& cells,
+                                                                 std::uint8_t counter);
+[[nodiscard]] protocol::InsertionRoll to_insertion_roll(const InsertionRollCells& cells,
+                                                        std::uint8_t counter);
 /// Status 0; the device time is the row's time in µs modulo 2^32 (the tracker clock wraps).
 [[nodiscard]] protocol::EmPoseMessage to_em_pose(const EmPoseCells& cells, std::uint8_t sensor_id,
                                                  std::uint32_t device_time_us);
-[[nodiscard]] protocol::TipForceMessage to_tip_force(const TipForceCells& cells, std::uint32_t device_time_us);
+[[nodiscard]] protocol::TipForceMessage to_tip_force(const TipForceCells& cells,
+                                                     std::uint32_t device_time_us);
 
 /// The inverse of the above for decoded messages (tests, a recorder on the box side).
 [[nodiscard]] ForceTorqueCells from_message(const protocol::HandleForceTorque& message);

@@ -15,157 +15,167 @@ namespace {
 
 /// A CAN bus that hands the box the log's frames and keeps what the box sends.
 class ReplayCanBus final : public hal::CanBus {
- public:
-  hal::CanStatus send(const hal::CanFrame& frame, std::uint32_t /*timeout_us*/) override {
-    sent.push_back(frame);
-    ++counters_.sent;
-    return hal::CanStatus::ok;
-  }
-  hal::CanStatus receive(hal::ReceivedCanFrame& received, std::uint32_t /*timeout_us*/) override {
-    if (queue.empty()) return hal::CanStatus::timeout;
-    received = queue.front();
-    queue.pop_front();
-    hal::count_received_frame(counters_, received.frame);
-    return hal::CanStatus::ok;
-  }
-  hal::CanCounters counters() const override { return counters_; }
+public:
+    hal::CanStatus send(const hal::CanFrame& frame, std::uint32_t /*timeout_us*/) override {
+        sent.push_back(frame);
+        ++counters_.sent;
+        return hal::CanStatus::ok;
+    }
+    hal::CanStatus receive(hal::ReceivedCanFrame& received, std::uint32_t /*timeout_us*/) override {
+        if (queue.empty()) return hal::CanStatus::timeout;
+        received = queue.front();
+        queue.pop_front();
+        hal::count_received_frame(counters_, received.frame);
+        return hal::CanStatus::ok;
+    }
+    hal::CanCounters counters() const override { return counters_; }
 
-  std::deque<hal::ReceivedCanFrame> queue;
-  std::vector<hal::CanFrame> sent;
+    std::deque<hal::ReceivedCanFrame> queue;
+    std::vector<hal::CanFrame> sent;
 
- private:
-  hal::CanCounters counters_{};
+private:
+    hal::CanCounters counters_{};
 };
 
 bool compared_output(std::uint32_t id) {
-  return id == protocol::kKineticEstimateId || id == protocol::kContactSummaryId || id == protocol::kAlarmsId ||
-         id == protocol::kStationForcesId;
+    return id == protocol::kKineticEstimateId || id == protocol::kContactSummaryId ||
+           id == protocol::kAlarmsId || id == protocol::kStationForcesId;
 }
 
 std::string frame_text(const hal::CanFrame& f) {
-  std::string s;
-  char b[16];
-  std::snprintf(b, sizeof b, "%03X#", static_cast<unsigned>(f.id));
-  s = b;
-  for (std::size_t i = 0; i < f.length; ++i) {
-    std::snprintf(b, sizeof b, "%02X", static_cast<unsigned>(f.data[i]));
-    s += b;
-  }
-  return s;
+    std::string s;
+    char b[16];
+    std::snprintf(b, sizeof b, "%03X#", static_cast<unsigned>(f.id));
+    s = b;
+    for (std::size_t i = 0; i < f.length; ++i) {
+        std::snprintf(b, sizeof b, "%02X", static_cast<unsigned>(f.data[i]));
+        s += b;
+    }
+    return s;
 }
 
 }  // namespace
 
 bool is_box_output_id(std::uint32_t id) {
-  return id == protocol::kBoxStatusId || id == protocol::kKineticEstimateId || id == protocol::kContactSummaryId ||
-         id == protocol::kAlarmsId || id == protocol::kBoxCountersId || id == protocol::kStationForcesId;
+    return id == protocol::kBoxStatusId || id == protocol::kKineticEstimateId ||
+           id == protocol::kContactSummaryId || id == protocol::kAlarmsId ||
+           id == protocol::kBoxCountersId || id == protocol::kStationForcesId;
 }
 
 CandumpLog read_candump_log(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw CandumpLineError(path + ": cannot be read", 0);
-  CandumpLog log;
-  std::string line;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    hal::CandumpRecord record{};
-    const hal::CandumpParse parse = hal::parse_candump_line(line, record);
-    if (parse == hal::CandumpParse::blank) continue;
-    if (parse != hal::CandumpParse::ok)
-      throw CandumpLineError(path + ": line " + std::to_string(number) + ": " + hal::describe(parse) +
-                                 " (expected candump -L format: '(1700000000.123456) can0 110#0102030405')",
-                             number);
-    if (!log.records.empty() && record.timestamp_us + 1000000U < log.records.back().timestamp_us)
-      throw CandumpLineError(path + ": line " + std::to_string(number) +
-                                 ": the timestamp goes back by more than 1 s (two recordings in one file?)",
-                             number);
-    if (!record.frame.error && !record.frame.extended && record.frame.id == protocol::kKineticEstimateId)
-      log.box_log = true;
-    log.records.push_back(record);
-    log.lines.push_back(number);
-  }
-  if (log.records.empty()) throw CandumpLineError(path + ": no CAN frames in the log", 0);
-  return log;
+    std::ifstream in(path);
+    if (!in) throw CandumpLineError(path + ": cannot be read", 0);
+    CandumpLog log;
+    std::string line;
+    std::size_t number = 0;
+    while (std::getline(in, line)) {
+        ++number;
+        hal::CandumpRecord record{};
+        const hal::CandumpParse parse = hal::parse_candump_line(line, record);
+        if (parse == hal::CandumpParse::blank) continue;
+        if (parse != hal::CandumpParse::ok)
+            throw CandumpLineError(
+                path + ": line " + std::to_string(number) + ": " + hal::describe(parse) +
+                    " (expected candump -L format: '(1700000000.123456) can0 110#0102030405')",
+                number);
+        if (!log.records.empty() &&
+            record.timestamp_us + 1000000U < log.records.back().timestamp_us)
+            throw CandumpLineError(
+                path + ": line " + std::to_string(number) +
+                    ": the timestamp goes back by more than 1 s (two recordings in one file?)",
+                number);
+        if (!record.frame.error && !record.frame.extended &&
+            record.frame.id == protocol::kKineticEstimateId)
+            log.box_log = true;
+        log.records.push_back(record);
+        log.lines.push_back(number);
+    }
+    if (log.records.empty()) throw CandumpLineError(path + ": no CAN frames in the log", 0);
+    return log;
 }
 
-ReplayResult replay_candump(const CandumpLog& log, const std::function<void(const BoxPeriod&)>& on_period) {
-  ReplayResult result;
-  auto bus = std::make_unique<ReplayCanBus>();
-  auto box = std::make_unique<executive::SensorBox>();
-  executive::BoxConfig config{};
-  config.period_us = kBoxPeriodUs;
-  config.kinetics.tables = &kinetics::default_reduced_tables();
-  (void)box->init(config, *bus, nullptr);
+ReplayResult replay_candump(const CandumpLog& log,
+                            const std::function<void(const BoxPeriod&)>& on_period) {
+    ReplayResult result;
+    auto bus = std::make_unique<ReplayCanBus>();
+    auto box = std::make_unique<executive::SensorBox>();
+    executive::BoxConfig config{};
+    config.period_us = kBoxPeriodUs;
+    config.kinetics.tables = &kinetics::default_reduced_tables();
+    (void)box->init(config, *bus, nullptr);
 
-  auto run = [&](std::uint64_t time_us) {
-    bus->sent.clear();
-    box->run_period(time_us, 0);
-    ++result.periods;
-    if (on_period) on_period({time_us, &box->outputs(), box->box_faults()});
-  };
-  auto is_input = [](const hal::CandumpRecord& r) {
-    return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
-  };
+    auto run = [&](std::uint64_t time_us) {
+        bus->sent.clear();
+        box->run_period(time_us, 0);
+        ++result.periods;
+        if (on_period) on_period({time_us, &box->outputs(), box->box_faults()});
+    };
+    auto is_input = [](const hal::CandumpRecord& r) {
+        return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
+    };
 
-  if (log.box_log) {
-    std::size_t i = 0;
-    const std::size_t n = log.records.size();
-    while (i < n) {
-      const hal::CandumpRecord& r = log.records[i];
-      if (is_input(r)) {
+    if (log.box_log) {
+        std::size_t i = 0;
+        const std::size_t n = log.records.size();
+        while (i < n) {
+            const hal::CandumpRecord& r = log.records[i];
+            if (is_input(r)) {
+                bus->queue.push_back({r.frame, r.timestamp_us});
+                ++result.frames_fed;
+                ++i;
+                continue;
+            }
+            if (r.frame.id !=
+                protocol::kKineticEstimateId) {  // outputs before the first full period
+                ++i;
+                continue;
+            }
+            run(r.timestamp_us);
+            // Compare this period's recorded outputs (up to the next input line or next period).
+            std::size_t sent_index = 0;
+            std::vector<hal::CanFrame> replayed;
+            for (const hal::CanFrame& f : bus->sent)
+                if (compared_output(f.id)) replayed.push_back(f);
+            std::size_t j = i;
+            for (; j < n && !is_input(log.records[j]); ++j) {
+                const hal::CanFrame& recorded = log.records[j].frame;
+                if (j > i && recorded.id == protocol::kKineticEstimateId) break;
+                if (!compared_output(recorded.id)) continue;
+                ++result.compared_frames;
+                const bool same =
+                    sent_index < replayed.size() && replayed[sent_index].id == recorded.id &&
+                    replayed[sent_index].length == recorded.length &&
+                    std::equal(recorded.data.begin(), recorded.data.begin() + recorded.length,
+                               replayed[sent_index].data.begin());
+                if (!same) {
+                    ++result.differing_frames;
+                    if (result.first_difference.empty())
+                        result.first_difference =
+                            "line " + std::to_string(log.lines[j]) + ": recorded " +
+                            frame_text(recorded) + ", replayed " +
+                            (sent_index < replayed.size() ? frame_text(replayed[sent_index])
+                                                          : "nothing");
+                }
+                ++sent_index;
+            }
+            i = j;
+        }
+        return result;
+    }
+
+    // Sensor log: periods every 5 ms from the first frame.
+    std::uint64_t next = log.records.front().timestamp_us + kBoxPeriodUs;
+    for (const hal::CandumpRecord& r : log.records) {
+        if (!is_input(r)) continue;
+        while (next < r.timestamp_us) {
+            run(next);
+            next += kBoxPeriodUs;
+        }
         bus->queue.push_back({r.frame, r.timestamp_us});
         ++result.frames_fed;
-        ++i;
-        continue;
-      }
-      if (r.frame.id != protocol::kKineticEstimateId) {  // outputs before the first full period
-        ++i;
-        continue;
-      }
-      run(r.timestamp_us);
-      // Compare this period's recorded outputs (up to the next input line or next period).
-      std::size_t sent_index = 0;
-      std::vector<hal::CanFrame> replayed;
-      for (const hal::CanFrame& f : bus->sent)
-        if (compared_output(f.id)) replayed.push_back(f);
-      std::size_t j = i;
-      for (; j < n && !is_input(log.records[j]); ++j) {
-        const hal::CanFrame& recorded = log.records[j].frame;
-        if (j > i && recorded.id == protocol::kKineticEstimateId) break;
-        if (!compared_output(recorded.id)) continue;
-        ++result.compared_frames;
-        const bool same = sent_index < replayed.size() && replayed[sent_index].id == recorded.id &&
-                          replayed[sent_index].length == recorded.length &&
-                          std::equal(recorded.data.begin(), recorded.data.begin() + recorded.length,
-                                     replayed[sent_index].data.begin());
-        if (!same) {
-          ++result.differing_frames;
-          if (result.first_difference.empty())
-            result.first_difference = "line " + std::to_string(log.lines[j]) + ": recorded " + frame_text(recorded) +
-                                      ", replayed " +
-                                      (sent_index < replayed.size() ? frame_text(replayed[sent_index]) : "nothing");
-        }
-        ++sent_index;
-      }
-      i = j;
     }
+    run(next);
     return result;
-  }
-
-  // Sensor log: periods every 5 ms from the first frame.
-  std::uint64_t next = log.records.front().timestamp_us + kBoxPeriodUs;
-  for (const hal::CandumpRecord& r : log.records) {
-    if (!is_input(r)) continue;
-    while (next < r.timestamp_us) {
-      run(next);
-      next += kBoxPeriodUs;
-    }
-    bus->queue.push_back({r.frame, r.timestamp_us});
-    ++result.frames_fed;
-  }
-  run(next);
-  return result;
 }
 
 }  // namespace scopekin::host_sim

@@ -22,17 +22,18 @@ namespace scopekin::host_sim {
 
 /// A log line that could not be parsed.
 struct CandumpLineError : std::runtime_error {
-  CandumpLineError(const std::string& message, std::size_t line) : std::runtime_error(message), line_(line) {}
-  std::size_t line() const { return line_; }
+    CandumpLineError(const std::string& message, std::size_t line)
+        : std::runtime_error(message), line_(line) {}
+    std::size_t line() const { return line_; }
 
- private:
-  std::size_t line_;
+private:
+    std::size_t line_;
 };
 
 struct CandumpLog {
-  std::vector<hal::CandumpRecord> records;
-  std::vector<std::size_t> lines;  ///< the file line of each record
-  bool box_log = false;
+    std::vector<hal::CandumpRecord> records;
+    std::vector<std::size_t> lines;  ///< the file line of each record
+    bool box_log = false;
 };
 
 /// Reads a candump log; throws CandumpLineError (naming the line) for a malformed line, and for
@@ -40,15 +41,16 @@ struct CandumpLog {
 CandumpLog read_candump_log(const std::string& path);
 
 struct ReplayResult {
-  std::uint64_t periods = 0;
-  std::uint64_t frames_fed = 0;
-  std::uint64_t compared_frames = 0;   ///< box log: recorded output frames compared
-  std::uint64_t differing_frames = 0;
-  std::string first_difference;        ///< empty if none
+    std::uint64_t periods = 0;
+    std::uint64_t frames_fed = 0;
+    std::uint64_t compared_frames = 0;  ///< box log: recorded output frames compared
+    std::uint64_t differing_frames = 0;
+    std::string first_difference;  ///< empty if none
 };
 
 /// Replays the log through a box; `on_period` sees every period (time, outputs).
-ReplayResult replay_candump(const CandumpLog& log, const std::function<void(const BoxPeriod&)>& on_period);
+ReplayResult replay_candump(const CandumpLog& log,
+                            const std::function<void(const BoxPeriod&)>& on_period);
 
 /// True for the ids the box sends.
 bool is_box_output_id(std::uint32_t id);

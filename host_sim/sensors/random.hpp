@@ -15,41 +15,41 @@
 namespace scopekin::sensors {
 
 class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t state) : state_(state) {}
-  std::uint64_t next();
+public:
+    explicit SplitMix64(std::uint64_t state) : state_(state) {}
+    std::uint64_t next();
 
- private:
-  std::uint64_t state_;
+private:
+    std::uint64_t state_;
 };
 
 class Xoshiro256StarStar {
- public:
-  /// State = four successive SplitMix64 outputs from `seed` (the seeding the authors recommend).
-  explicit Xoshiro256StarStar(std::uint64_t seed);
-  /// A given state (not all zero).
-  static Xoshiro256StarStar from_state(const std::array<std::uint64_t, 4>& state);
+public:
+    /// State = four successive SplitMix64 outputs from `seed` (the seeding the authors recommend).
+    explicit Xoshiro256StarStar(std::uint64_t seed);
+    /// A given state (not all zero).
+    static Xoshiro256StarStar from_state(const std::array<std::uint64_t, 4>& state);
 
-  std::uint64_t next();
-  /// Uniform in [0, 1), 53 random bits.
-  double uniform();
-  /// Uniform in (0, 1], 53 random bits (never 0: the Box–Muller logarithm needs that).
-  double uniform_positive();
+    std::uint64_t next();
+    /// Uniform in [0, 1), 53 random bits.
+    double uniform();
+    /// Uniform in (0, 1], 53 random bits (never 0: the Box–Muller logarithm needs that).
+    double uniform_positive();
 
- private:
-  Xoshiro256StarStar() = default;
-  std::array<std::uint64_t, 4> s_{};
+private:
+    Xoshiro256StarStar() = default;
+    std::array<std::uint64_t, 4> s_{};
 };
 
 /// Standard normal deviates (mean 0, SD 1) by Box–Muller; the second value of each pair is kept
 /// for the next call.
 class NormalSampler {
- public:
-  double next(Xoshiro256StarStar& rng);
+public:
+    double next(Xoshiro256StarStar& rng);
 
- private:
-  bool has_spare_ = false;
-  double spare_ = 0;
+private:
+    bool has_spare_ = false;
+    double spare_ = 0;
 };
 
 /// Natural logarithm of x > 0 (finite), from IEEE-exact operations.

@@ -17,32 +17,32 @@ inline constexpr std::int64_t kTickUs = 1000;
 
 /// When a sensor samples and how its samples travel.
 struct SamplingConfig {
-  bool enabled = true;
-  double rate_Hz = 1000.0;            ///< the period 1/rate must be a whole number of ticks (within 1 µs)
-  double latency_s = 0.0;             ///< sample -> arrival; a whole number of ticks (within 1 µs)
-  double dropout_probability = 0.0;   ///< per sample, independent
+    bool enabled = true;
+    double rate_Hz = 1000.0;  ///< the period 1/rate must be a whole number of ticks (within 1 µs)
+    double latency_s = 0.0;   ///< sample -> arrival; a whole number of ticks (within 1 µs)
+    double dropout_probability = 0.0;  ///< per sample, independent
 };
 
 /// Handle force/torque cell (CAN 0x110).
 struct HandleForceTorqueConfig {
-  SamplingConfig sampling{true, 1000.0, 0.0, 0.0};
-  double force_noise_N = 0.02;
-  double force_bias_N = 0.0;
-  double force_quantum_N = 0.005;      ///< >= the DBC's 0.005 N
-  double torque_noise_Nmm = 0.5;
-  double torque_bias_Nmm = 0.0;
-  double torque_quantum_Nmm = 0.1;     ///< >= the DBC's 0.1 N·mm
+    SamplingConfig sampling{true, 1000.0, 0.0, 0.0};
+    double force_noise_N = 0.02;
+    double force_bias_N = 0.0;
+    double force_quantum_N = 0.005;  ///< >= the DBC's 0.005 N
+    double torque_noise_Nmm = 0.5;
+    double torque_bias_Nmm = 0.0;
+    double torque_quantum_Nmm = 0.1;  ///< >= the DBC's 0.1 N·mm
 };
 
 /// Insertion/roll encoder (CAN 0x111).
 struct InsertionRollConfig {
-  SamplingConfig sampling{true, 1000.0, 0.0, 0.0};
-  double insertion_noise_mm = 0.0;
-  double insertion_bias_mm = 0.0;
-  double insertion_quantum_mm = 0.01;  ///< >= the DBC's 0.01 mm
-  double roll_noise_rad = 0.0;
-  double roll_bias_rad = 0.0;
-  double roll_quantum_rad = 0.0001;    ///< >= the DBC's 0.0001 rad
+    SamplingConfig sampling{true, 1000.0, 0.0, 0.0};
+    double insertion_noise_mm = 0.0;
+    double insertion_bias_mm = 0.0;
+    double insertion_quantum_mm = 0.01;  ///< >= the DBC's 0.01 mm
+    double roll_noise_rad = 0.0;
+    double roll_bias_rad = 0.0;
+    double roll_quantum_rad = 0.0001;  ///< >= the DBC's 0.0001 rad
 };
 
 /// The thesis bench's trakSTAR: 30 Hz, rounded to a whole 33 ms period of the 1 ms tick.
@@ -51,29 +51,30 @@ inline constexpr double kBenchRate_Hz = 1000.0 / 33.0;
 /// EM tracker, four 6-DOF sensors (serial pose frames).  Each sensor samples, drops and draws its
 /// noise independently, with the same settings.
 struct EmTrackerConfig {
-  SamplingConfig sampling{true, kBenchRate_Hz, 0.0, 0.0};
-  std::array<bool, 4> sensors{true, true, true, true};  ///< by wire id: tip, 20 cm, handle, sigmoid
-  double position_noise_mm = 0.5;                       ///< per axis, SD
-  std::array<double, 3> position_bias_mm{};             ///< colon frame
-  double position_quantum_mm = 0.001;                   ///< >= the wire's 1 µm
-  double orientation_noise_rad = 0.002;                 ///< per body axis, SD of the rotation vector
-  std::array<double, 3> orientation_bias_rad{};         ///< rotation vector, body frame
+    SamplingConfig sampling{true, kBenchRate_Hz, 0.0, 0.0};
+    std::array<bool, 4> sensors{true, true, true,
+                                true};             ///< by wire id: tip, 20 cm, handle, sigmoid
+    double position_noise_mm = 0.5;                ///< per axis, SD
+    std::array<double, 3> position_bias_mm{};      ///< colon frame
+    double position_quantum_mm = 0.001;            ///< >= the wire's 1 µm
+    double orientation_noise_rad = 0.002;          ///< per body axis, SD of the rotation vector
+    std::array<double, 3> orientation_bias_rad{};  ///< rotation vector, body frame
 };
 
 /// Tip contact force sensor (serial tip force frames).
 struct TipForceConfig {
-  SamplingConfig sampling{true, kBenchRate_Hz, 0.0, 0.0};
-  bool single_axis = true;        ///< Flexiforce: z only (>= 0), x = y = 0
-  double force_noise_N = 0.075;   ///< per measured axis, SD
-  double force_bias_N = 0.0;      ///< per measured axis
-  double force_quantum_N = 0.001; ///< >= the wire's 1 mN
+    SamplingConfig sampling{true, kBenchRate_Hz, 0.0, 0.0};
+    bool single_axis = true;         ///< Flexiforce: z only (>= 0), x = y = 0
+    double force_noise_N = 0.075;    ///< per measured axis, SD
+    double force_bias_N = 0.0;       ///< per measured axis
+    double force_quantum_N = 0.001;  ///< >= the wire's 1 mN
 };
 
 struct SensorSuiteConfig {
-  HandleForceTorqueConfig handle_force_torque;
-  InsertionRollConfig insertion_roll;
-  EmTrackerConfig em_tracker;
-  TipForceConfig tip_force;
+    HandleForceTorqueConfig handle_force_torque;
+    InsertionRollConfig insertion_roll;
+    EmTrackerConfig em_tracker;
+    TipForceConfig tip_force;
 };
 
 /// Reads a configuration object (keys handle_force_torque, insertion_roll, em_tracker, tip_force;

@@ -18,41 +18,41 @@ namespace scopekin::host_sim {
 /// One alarm episode. Kinds: "self_lock", "contact_force_warning" (level warning or above),
 /// "contact_force_critical".
 struct AlarmEpisode {
-  std::string kind;
-  double raised_s = 0;
-  std::optional<double> cleared_s;
-  double tip_path_mm = 0;  ///< the estimated tip position when raised
+    std::string kind;
+    double raised_s = 0;
+    std::optional<double> cleared_s;
+    double tip_path_mm = 0;  ///< the estimated tip position when raised
 };
 
 struct BoxObservation {
-  std::uint64_t periods = 0;
-  std::vector<AlarmEpisode> alarms;
-  double peak_contact_force_N = 0;  ///< estimated, largest station force
-  double peak_contact_time_s = 0;
-  double peak_contact_path_mm = 0;
-  unsigned peak_contact_station = 0;
-  std::array<std::uint64_t, 14> fault_periods{};  ///< periods with kinetics fault bit k set
-  std::array<double, 14> fault_first_s{};         ///< time of the first such period [s] (if any)
-  std::uint64_t estimate_invalid_periods = 0;
+    std::uint64_t periods = 0;
+    std::vector<AlarmEpisode> alarms;
+    double peak_contact_force_N = 0;  ///< estimated, largest station force
+    double peak_contact_time_s = 0;
+    double peak_contact_path_mm = 0;
+    unsigned peak_contact_station = 0;
+    std::array<std::uint64_t, 14> fault_periods{};  ///< periods with kinetics fault bit k set
+    std::array<double, 14> fault_first_s{};         ///< time of the first such period [s] (if any)
+    std::uint64_t estimate_invalid_periods = 0;
 };
 
 /// Names of the kinetics fault bits (kinetics_io.hpp FaultFlag), bit k.
 const std::array<const char*, 14>& kinetics_fault_names();
 
 class BoxObserver {
- public:
-  /// `csv` (may be null): firmware.csv is written there, header first.
-  explicit BoxObserver(std::ostream* csv);
-  void observe(const BoxPeriod& period);
-  const BoxObservation& observation() const { return observation_; }
-  /// The observation as JSON (alarms, peak, fault periods by name).
-  nlohmann::ordered_json to_json() const;
+public:
+    /// `csv` (may be null): firmware.csv is written there, header first.
+    explicit BoxObserver(std::ostream* csv);
+    void observe(const BoxPeriod& period);
+    const BoxObservation& observation() const { return observation_; }
+    /// The observation as JSON (alarms, peak, fault periods by name).
+    nlohmann::ordered_json to_json() const;
 
- private:
-  void edge(const char* kind, bool now, bool& before, double time_s, double tip_mm);
-  std::ostream* csv_;
-  BoxObservation observation_;
-  bool self_lock_ = false, warning_ = false, critical_ = false;
+private:
+    void edge(const char* kind, bool now, bool& before, double time_s, double tip_mm);
+    std::ostream* csv_;
+    BoxObservation observation_;
+    bool self_lock_ = false, warning_ = false, critical_ = false;
 };
 
 }  // namespace scopekin::host_sim

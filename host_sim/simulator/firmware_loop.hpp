@@ -26,51 +26,52 @@ inline constexpr std::uint32_t kBoxPeriodUs = 5000;
 
 /// What the box did in one period: its release time and the estimator's outputs.
 struct BoxPeriod {
-  std::uint64_t time_us = 0;
-  const kinetics::Outputs* outputs = nullptr;
-  std::uint16_t box_faults = 0;  ///< messages::BoxFault bits (BoxStatus.DriverFaults)
+    std::uint64_t time_us = 0;
+    const kinetics::Outputs* outputs = nullptr;
+    std::uint16_t box_faults = 0;  ///< messages::BoxFault bits (BoxStatus.DriverFaults)
 };
 
 /// Frames the box published, by message (drained from the wire every period).
 struct PublishedFrames {
-  std::uint64_t estimates = 0, summaries = 0, alarms = 0, stations = 0, counters = 0, status = 0, other = 0;
+    std::uint64_t estimates = 0, summaries = 0, alarms = 0, stations = 0, counters = 0, status = 0,
+                  other = 0;
 };
 
 class FirmwareLoop {
- public:
-  using PeriodCallback = std::function<void(const BoxPeriod&)>;
-  /// Initialises the box (the default reduced tables, `period_us`). `on_period` sees every period.
-  explicit FirmwareLoop(PeriodCallback on_period, std::uint32_t period_us = kBoxPeriodUs);
-  ~FirmwareLoop();
-  FirmwareLoop(const FirmwareLoop&) = delete;
-  FirmwareLoop& operator=(const FirmwareLoop&) = delete;
+public:
+    using PeriodCallback = std::function<void(const BoxPeriod&)>;
+    /// Initialises the box (the default reduced tables, `period_us`). `on_period` sees every period.
+    explicit FirmwareLoop(PeriodCallback on_period, std::uint32_t period_us = kBoxPeriodUs);
+    ~FirmwareLoop();
+    FirmwareLoop(const FirmwareLoop&) = delete;
+    FirmwareLoop& operator=(const FirmwareLoop&) = delete;
 
-  /// Runs the periods due before the row's time, then sends the row's frames and bytes.
-  /// Rows must come in strictly increasing time (the reader checks recordings).
-  void deliver(const recording::RecordingRow& row);
-  /// Runs the periods up to and including `end_us`.
-  void finish(std::uint64_t end_us);
+    /// Runs the periods due before the row's time, then sends the row's frames and bytes.
+    /// Rows must come in strictly increasing time (the reader checks recordings).
+    void deliver(const recording::RecordingRow& row);
+    /// Runs the periods up to and including `end_us`.
+    void finish(std::uint64_t end_us);
 
-  bool estimator_ok() const { return estimator_ok_; }
-  std::uint64_t periods() const { return periods_; }
-  const PublishedFrames& published() const { return published_; }
-  const executive::SensorBox& box() const { return *box_; }
-  const recording::DeviceFeeder& feeder() const { return *feeder_; }
+    bool estimator_ok() const { return estimator_ok_; }
+    std::uint64_t periods() const { return periods_; }
+    const PublishedFrames& published() const { return published_; }
+    const executive::SensorBox& box() const { return *box_; }
+    const recording::DeviceFeeder& feeder() const { return *feeder_; }
 
- private:
-  void run_period(std::uint64_t time_us);
+private:
+    void run_period(std::uint64_t time_us);
 
-  PeriodCallback on_period_;
-  std::uint32_t period_us_;
-  std::uint64_t next_period_us_;
-  std::uint64_t periods_ = 0;
-  bool estimator_ok_ = false;
-  PublishedFrames published_;
-  std::unique_ptr<hal::SimulatedClock> clock_;
-  std::unique_ptr<hal::LoopbackCanWire> wire_;
-  std::unique_ptr<hal::LoopbackSerialPort> serial_;
-  std::unique_ptr<executive::SensorBox> box_;
-  std::unique_ptr<recording::DeviceFeeder> feeder_;
+    PeriodCallback on_period_;
+    std::uint32_t period_us_;
+    std::uint64_t next_period_us_;
+    std::uint64_t periods_ = 0;
+    bool estimator_ok_ = false;
+    PublishedFrames published_;
+    std::unique_ptr<hal::SimulatedClock> clock_;
+    std::unique_ptr<hal::LoopbackCanWire> wire_;
+    std::unique_ptr<hal::LoopbackSerialPort> serial_;
+    std::unique_ptr<executive::SensorBox> box_;
+    std::unique_ptr<recording::DeviceFeeder> feeder_;
 };
 
 }  // namespace scopekin::host_sim

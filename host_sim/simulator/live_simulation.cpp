@@ -18,166 +18,183 @@ using Json = nlohmann::ordered_json;
 /// Snapshots kept at most (the plot has a panel each).
 constexpr std::size_t kMaxSnapshots = 6;
 
-std::int64_t to_us(double t_s) { return std::llround(t_s * 1e6); }
+std::int64_t to_us(double t_s) {
+    return std::llround(t_s * 1e6);
+}
 
 sensors::TruthSample truth_of(const WorldReadout& r, std::int64_t time_us) {
-  sensors::TruthSample t;
-  t.time_us = time_us;
-  t.handle_force_N = r.handle_force_N;
-  t.handle_torque_Nmm = r.handle_torque_Nmm;
-  t.insertion_mm = r.insertion_mm;
-  t.roll_rad = r.roll_rad;
-  for (std::size_t k = 0; k < r.em.size(); ++k) {
-    t.em[k].position_mm = r.em[k].position_mm;
-    t.em[k].orientation = r.em[k].orientation;
-  }
-  // The tip sensor's frame: x, y across the tip, z along its axis (the readout's tip orientation
-  // takes +x to the axis).
-  const Eigen::Vector3d local = r.em[kEmTip].orientation.conjugate() * r.tip_force_N;
-  t.tip_force_N = Eigen::Vector3d(local.y(), local.z(), local.x());
-  t.region = r.tip_region;
-  return t;
+    sensors::TruthSample t;
+    t.time_us = time_us;
+    t.handle_force_N = r.handle_force_N;
+    t.handle_torque_Nmm = r.handle_torque_Nmm;
+    t.insertion_mm = r.insertion_mm;
+    t.roll_rad = r.roll_rad;
+    for (std::size_t k = 0; k < r.em.size(); ++k) {
+        t.em[k].position_mm = r.em[k].position_mm;
+        t.em[k].orientation = r.em[k].orientation;
+    }
+    // The tip sensor's frame: x, y across the tip, z along its axis (the readout's tip orientation
+    // takes +x to the axis).
+    const Eigen::Vector3d local = r.em[kEmTip].orientation.conjugate() * r.tip_force_N;
+    t.tip_force_N = Eigen::Vector3d(local.y(), local.z(), local.x());
+    t.region = r.tip_region;
+    return t;
 }
 
 Json counters_json(const sensors::SensorCounters& c) {
-  return {{"taken", c.taken}, {"dropped", c.dropped}, {"delivered", c.delivered}};
+    return {{"taken", c.taken}, {"dropped", c.dropped}, {"delivered", c.delivered}};
 }
 
 Json sensor_counters_json(const sensors::SensorSuiteCounters& c) {
-  Json em = Json::object();
-  for (std::size_t k = 0; k < c.em.size(); ++k) em[std::string(recording::em_slot_prefix(k))] = counters_json(c.em[k]);
-  return {{"handle_force_torque", counters_json(c.handle_force_torque)},
-          {"insertion_roll", counters_json(c.insertion_roll)},
-          {"em_tracker", em},
-          {"tip_force", counters_json(c.tip_force)}};
+    Json em = Json::object();
+    for (std::size_t k = 0; k < c.em.size(); ++k)
+        em[std::string(recording::em_slot_prefix(k))] = counters_json(c.em[k]);
+    return {{"handle_force_torque", counters_json(c.handle_force_torque)},
+            {"insertion_roll", counters_json(c.insertion_roll)},
+            {"em_tracker", em},
+            {"tip_force", counters_json(c.tip_force)}};
 }
 
 }  // namespace
 
 std::string region_at_path(const model::ColonTube& colon, double path_mm) {
-  std::size_t i = 0;
-  while (i + 1 < colon.point_count() && colon.arc_length_mm(i + 1) <= path_mm) ++i;
-  return std::string(model::region_name(colon.points()[i].region));
+    std::size_t i = 0;
+    while (i + 1 < colon.point_count() && colon.arc_length_mm(i + 1) <= path_mm)
+        ++i;
+    return std::string(model::region_name(colon.points()[i].region));
 }
 
-LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteConfig& sensor_config,
-                    std::uint64_t seed, const LiveStreams& streams,
+LiveResult run_live(const model::Scenario& scenario,
+                    const sensors::SensorSuiteConfig& sensor_config, std::uint64_t seed,
+                    const LiveStreams& streams,
                     const std::function<void(const model::SimulationProgress&)>& on_progress) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  LiveResult result;
-  std::unique_ptr<model::World> world = model::build_world(scenario);
-  WorldReader reader(*world);
-  sensors::SensorSuite suite(sensor_config, seed);
-  std::unique_ptr<recording::RecordingWriter> recording_writer;
-  if (streams.recording != nullptr) recording_writer = std::make_unique<recording::RecordingWriter>(*streams.recording);
+    const auto wall_start = std::chrono::steady_clock::now();
+    LiveResult result;
+    std::unique_ptr<model::World> world = model::build_world(scenario);
+    WorldReader reader(*world);
+    sensors::SensorSuite suite(sensor_config, seed);
+    std::unique_ptr<recording::RecordingWriter> recording_writer;
+    if (streams.recording != nullptr)
+        recording_writer = std::make_unique<recording::RecordingWriter>(*streams.recording);
 
-  bool snapshot_wanted = false;
-  std::string snapshot_label;
-  BoxObserver observer(streams.firmware);
-  FirmwareLoop firmware([&](const BoxPeriod& period) {
-    const std::size_t alarms_before = observer.observation().alarms.size();
-    observer.observe(period);
-    const auto& alarms = observer.observation().alarms;
-    if (alarms.size() > alarms_before && !snapshot_wanted) {
-      bool first_of_kind = true;
-      for (std::size_t i = 0; i + 1 < alarms.size(); ++i) first_of_kind = first_of_kind && alarms[i].kind != alarms.back().kind;
-      if (first_of_kind && alarms.back().kind != "contact_force_warning") {
-        snapshot_wanted = true;
-        snapshot_label = alarms.back().kind + " alarm raised";
-      }
-    }
-  });
+    bool snapshot_wanted = false;
+    std::string snapshot_label;
+    BoxObserver observer(streams.firmware);
+    FirmwareLoop firmware([&](const BoxPeriod& period) {
+        const std::size_t alarms_before = observer.observation().alarms.size();
+        observer.observe(period);
+        const auto& alarms = observer.observation().alarms;
+        if (alarms.size() > alarms_before && !snapshot_wanted) {
+            bool first_of_kind = true;
+            for (std::size_t i = 0; i + 1 < alarms.size(); ++i)
+                first_of_kind = first_of_kind && alarms[i].kind != alarms.back().kind;
+            if (first_of_kind && alarms.back().kind != "contact_force_warning") {
+                snapshot_wanted = true;
+                snapshot_label = alarms.back().kind + " alarm raised";
+            }
+        }
+    });
 
-  Json snapshots = Json::array();
-  auto take_snapshot = [&](const std::string& label, bool last = false) {
-    if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
-    Json snap = reader.snapshot(*world, label);
-    Json estimated = Json::array();  // the box's stations in the last period
-    const kinetics::Outputs& o = firmware.box().outputs();
-    for (std::size_t k = 0; k < o.active_stations && k < o.stations.size(); ++k) {
-      const kinetics::StationEstimate& st = o.stations[k];
-      estimated.push_back({{"station", k},
-                           {"path_mm", static_cast<double>(st.path_position_mm.raw()) / 65536.0},
-                           {"normal_N", static_cast<double>(st.normal_force_N.raw()) / 65536.0},
-                           {"tangential_N", static_cast<double>(st.tangential_force_N.raw()) / 65536.0}});
-    }
-    snap["estimated"] = estimated;
-    snapshots.push_back(snap);
-  };
+    Json snapshots = Json::array();
+    auto take_snapshot = [&](const std::string& label, bool last = false) {
+        if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
+        Json snap = reader.snapshot(*world, label);
+        Json estimated = Json::array();  // the box's stations in the last period
+        const kinetics::Outputs& o = firmware.box().outputs();
+        for (std::size_t k = 0; k < o.active_stations && k < o.stations.size(); ++k) {
+            const kinetics::StationEstimate& st = o.stations[k];
+            estimated.push_back(
+                {{"station", k},
+                 {"path_mm", static_cast<double>(st.path_position_mm.raw()) / 65536.0},
+                 {"normal_N", static_cast<double>(st.normal_force_N.raw()) / 65536.0},
+                 {"tangential_N", static_cast<double>(st.tangential_force_N.raw()) / 65536.0}});
+        }
+        snap["estimated"] = estimated;
+        snapshots.push_back(snap);
+    };
 
-  WorldReadout previous = reader.read(*world);
-  WorldReadout latest = previous;
-  std::int64_t last_tick_us = to_us(world->time_s());
-  std::int64_t last_delivered_us = 0;  // the box runs up to the last row, as `scopekin run` does
-  std::size_t next_action = 1;
-  const auto& actions = scenario.procedure.actions();
+    WorldReadout previous = reader.read(*world);
+    WorldReadout latest = previous;
+    std::int64_t last_tick_us = to_us(world->time_s());
+    std::int64_t last_delivered_us = 0;  // the box runs up to the last row, as `scopekin run` does
+    std::size_t next_action = 1;
+    const auto& actions = scenario.procedure.actions();
 
-  if (streams.world != nullptr) *streams.world << world_csv_header(scenario, model::output_nodes(scenario)) << '\n';
-  if (streams.contacts != nullptr) *streams.contacts << contacts_csv_header() << '\n';
+    if (streams.world != nullptr)
+        *streams.world << world_csv_header(scenario, model::output_nodes(scenario)) << '\n';
+    if (streams.contacts != nullptr) *streams.contacts << contacts_csv_header() << '\n';
 
-  model::SimulationCallbacks callbacks;
-  callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
-    latest = reader.read(w);
-    const std::int64_t now_us = to_us(w.time_s());
-    const double span_us = static_cast<double>(now_us - to_us(previous.time_s));
-    for (std::int64_t t = last_tick_us + sensors::kTickUs; t <= now_us; t += sensors::kTickUs) {
-      const double weight = span_us > 0 ? static_cast<double>(t - to_us(previous.time_s)) / span_us : 1.0;
-      recording::RecordingRow row = suite.tick(truth_of(blend(previous, latest, weight), t));
-      if (!row.has_sensor_data()) continue;
-      row = recording::wire::quantize_to_wire(row);
-      if (row.handle) result.peak_measured_handle_force_N = std::max(result.peak_measured_handle_force_N, std::abs(row.handle->force_N));
-      if (recording_writer) recording_writer->write(row);
-      firmware.deliver(row);
-      last_delivered_us = t;
-      ++result.rows_delivered;
-      last_tick_us = t;
-    }
-    last_tick_us = std::max(last_tick_us, now_us - (now_us % sensors::kTickUs));
-    // True advance efficiency per region (hand advancing only).
-    const double handle_step = latest.insertion_mm - previous.insertion_mm;
-    if (handle_step > 0.0) {
-      RegionAdvance& bucket = result.advance_by_region[latest.tip_region];
-      bucket.handle_advance_mm += handle_step;
-      bucket.tip_advance_mm += latest.tip_path_mm - previous.tip_path_mm;
-    }
-    result.peak_true_tip_contact_force_N = std::max(result.peak_true_tip_contact_force_N, latest.tip_force_N.norm());
-    for (const model::WorldContact& c : w.contacts())
-      if (c.normal_force_N > result.peak_true_contact_force_N) {
-        result.peak_true_contact_force_N = c.normal_force_N;
-        result.peak_true_contact_region = std::string(model::region_name(c.region));
-      }
-    previous = latest;
-    if (snapshot_wanted) {
-      take_snapshot(snapshot_label);
-      snapshot_wanted = false;
-    }
-    while (next_action < actions.size() && w.time_s() + 1e-9 >= actions[next_action].start_s) {
-      // Where the hand changes course: the shape the last action left.
-      const model::ActionKind kind = actions[next_action].kind;
-      if (kind != model::ActionKind::hold && kind != model::ActionKind::rotate)
-        take_snapshot(std::string(model::action_name(kind)) + " starts");
-      ++next_action;
-    }
-  };
-  callbacks.on_sample = [&](const model::WorldRow& s, const model::World& w) {
-    if (streams.world != nullptr) write_world_csv_row(*streams.world, s, latest);
-    if (streams.contacts != nullptr) write_contacts_csv_rows(*streams.contacts, s.time_s, w);
-  };
-  callbacks.on_progress = on_progress;
+    model::SimulationCallbacks callbacks;
+    callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
+        latest = reader.read(w);
+        const std::int64_t now_us = to_us(w.time_s());
+        const double span_us = static_cast<double>(now_us - to_us(previous.time_s));
+        for (std::int64_t t = last_tick_us + sensors::kTickUs; t <= now_us; t += sensors::kTickUs) {
+            const double weight =
+                span_us > 0 ? static_cast<double>(t - to_us(previous.time_s)) / span_us : 1.0;
+            recording::RecordingRow row = suite.tick(truth_of(blend(previous, latest, weight), t));
+            if (!row.has_sensor_data()) continue;
+            row = recording::wire::quantize_to_wire(row);
+            if (row.handle)
+                result.peak_measured_handle_force_N =
+                    std::max(result.peak_measured_handle_force_N, std::abs(row.handle->force_N));
+            if (recording_writer) recording_writer->write(row);
+            firmware.deliver(row);
+            last_delivered_us = t;
+            ++result.rows_delivered;
+            last_tick_us = t;
+        }
+        last_tick_us = std::max(last_tick_us, now_us - (now_us % sensors::kTickUs));
+        // True advance efficiency per region (hand advancing only).
+        const double handle_step = latest.insertion_mm - previous.insertion_mm;
+        if (handle_step > 0.0) {
+            RegionAdvance& bucket = result.advance_by_region[latest.tip_region];
+            bucket.handle_advance_mm += handle_step;
+            bucket.tip_advance_mm += latest.tip_path_mm - previous.tip_path_mm;
+        }
+        result.peak_true_tip_contact_force_N =
+            std::max(result.peak_true_tip_contact_force_N, latest.tip_force_N.norm());
+        for (const model::WorldContact& c : w.contacts())
+            if (c.normal_force_N > result.peak_true_contact_force_N) {
+                result.peak_true_contact_force_N = c.normal_force_N;
+                result.peak_true_contact_region = std::string(model::region_name(c.region));
+            }
+        previous = latest;
+        if (snapshot_wanted) {
+            take_snapshot(snapshot_label);
+            snapshot_wanted = false;
+        }
+        while (next_action < actions.size() && w.time_s() + 1e-9 >= actions[next_action].start_s) {
+            // Where the hand changes course: the shape the last action left.
+            const model::ActionKind kind = actions[next_action].kind;
+            if (kind != model::ActionKind::hold && kind != model::ActionKind::rotate)
+                take_snapshot(std::string(model::action_name(kind)) + " starts");
+            ++next_action;
+        }
+    };
+    callbacks.on_sample = [&](const model::WorldRow& s, const model::World& w) {
+        if (streams.world != nullptr) write_world_csv_row(*streams.world, s, latest);
+        if (streams.contacts != nullptr) write_contacts_csv_rows(*streams.contacts, s.time_s, w);
+    };
+    callbacks.on_progress = on_progress;
 
-  result.world = model::run_simulation(*world, scenario, callbacks);
-  firmware.finish(static_cast<std::uint64_t>(last_delivered_us));
-  snapshots.erase(snapshots.begin() + static_cast<long>(std::min(snapshots.size(), kMaxSnapshots - 1)), snapshots.end());
-  take_snapshot(result.world.complete ? "end" : "failure", true);
-  result.snapshots = {{"colon", WorldReader::colon_json(world->colon())}, {"snapshots", snapshots}};
-  result.box = observer.observation();
-  result.box_json = observer.to_json();
-  result.firmware_periods = firmware.periods();
-  result.final_tip_path_mm = latest.tip_path_mm;
-  result.final_tip_region = latest.tip_region;
-  result.sensor_counters = sensor_counters_json(suite.counters());
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  return result;
+    result.world = model::run_simulation(*world, scenario, callbacks);
+    firmware.finish(static_cast<std::uint64_t>(last_delivered_us));
+    snapshots.erase(
+        snapshots.begin() + static_cast<long>(std::min(snapshots.size(), kMaxSnapshots - 1)),
+        snapshots.end());
+    take_snapshot(result.world.complete ? "end" : "failure", true);
+    result.snapshots = {{"colon", WorldReader::colon_json(world->colon())},
+                        {"snapshots", snapshots}};
+    result.box = observer.observation();
+    result.box_json = observer.to_json();
+    result.firmware_periods = firmware.periods();
+    result.final_tip_path_mm = latest.tip_path_mm;
+    result.final_tip_region = latest.tip_region;
+    result.sensor_counters = sensor_counters_json(suite.counters());
+    result.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    return result;
 }
 
 }  // namespace scopekin::host_sim

@@ -20,40 +20,42 @@
 namespace scopekin::host_sim {
 
 struct LiveStreams {
-  std::ostream* recording = nullptr;  ///< recording.csv (sensor rows)
-  std::ostream* world = nullptr;      ///< world.csv (true state at the output rate)
-  std::ostream* firmware = nullptr;   ///< firmware.csv (the box's outputs per period)
-  std::ostream* contacts = nullptr;   ///< contacts.csv (loaded contacts at the output rate), optional
+    std::ostream* recording = nullptr;  ///< recording.csv (sensor rows)
+    std::ostream* world = nullptr;      ///< world.csv (true state at the output rate)
+    std::ostream* firmware = nullptr;   ///< firmware.csv (the box's outputs per period)
+    std::ostream* contacts =
+        nullptr;  ///< contacts.csv (loaded contacts at the output rate), optional
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand
 /// advances, the tip's region deciding the bucket.
 struct RegionAdvance {
-  double handle_advance_mm = 0;
-  double tip_advance_mm = 0;
+    double handle_advance_mm = 0;
+    double tip_advance_mm = 0;
 };
 
 struct LiveResult {
-  model::SimulationSummary world;
-  BoxObservation box;
-  nlohmann::ordered_json box_json;
-  nlohmann::ordered_json snapshots;  ///< {"colon": ..., "snapshots": [...]}
-  std::map<std::string, RegionAdvance> advance_by_region;  ///< region name -> sums
-  double peak_measured_handle_force_N = 0;
-  double peak_true_tip_contact_force_N = 0;
-  double peak_true_contact_force_N = 0;
-  std::string peak_true_contact_region;
-  double final_tip_path_mm = 0;
-  std::string final_tip_region;
-  std::uint64_t rows_delivered = 0;
-  std::uint64_t firmware_periods = 0;
-  nlohmann::ordered_json sensor_counters;
-  double wall_time_s = 0;
+    model::SimulationSummary world;
+    BoxObservation box;
+    nlohmann::ordered_json box_json;
+    nlohmann::ordered_json snapshots;                        ///< {"colon": ..., "snapshots": [...]}
+    std::map<std::string, RegionAdvance> advance_by_region;  ///< region name -> sums
+    double peak_measured_handle_force_N = 0;
+    double peak_true_tip_contact_force_N = 0;
+    double peak_true_contact_force_N = 0;
+    std::string peak_true_contact_region;
+    double final_tip_path_mm = 0;
+    std::string final_tip_region;
+    std::uint64_t rows_delivered = 0;
+    std::uint64_t firmware_periods = 0;
+    nlohmann::ordered_json sensor_counters;
+    double wall_time_s = 0;
 };
 
 /// Runs `scenario` (a world scenario) live. `on_progress` sees every world step.
-LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteConfig& sensors, std::uint64_t seed,
-                    const LiveStreams& streams, const std::function<void(const model::SimulationProgress&)>& on_progress);
+LiveResult run_live(const model::Scenario& scenario, const sensors::SensorSuiteConfig& sensors,
+                    std::uint64_t seed, const LiveStreams& streams,
+                    const std::function<void(const model::SimulationProgress&)>& on_progress);
 
 /// The colon region a path position [mm] falls in.
 std::string region_at_path(const model::ColonTube& colon, double path_mm);

@@ -12,8 +12,10 @@
 
 namespace scopekin::host_sim {
 
-std::string world_csv_header(const model::Scenario& scenario, const std::vector<std::size_t>& nodes);
-void write_world_csv_row(std::ostream& out, const model::WorldRow& row, const WorldReadout& readout);
+std::string world_csv_header(const model::Scenario& scenario,
+                             const std::vector<std::size_t>& nodes);
+void write_world_csv_row(std::ostream& out, const model::WorldRow& row,
+                         const WorldReadout& readout);
 
 /// contacts.csv (scenario outputs.contacts_file): one row per loaded contact per sample.
 std::string contacts_csv_header();

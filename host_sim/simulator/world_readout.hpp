@@ -25,41 +25,47 @@ namespace scopekin::host_sim {
 inline constexpr double kTipStretch_mm = 25.0;
 
 struct Pose {
-  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+    Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
+    Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
 };
 
-enum EmSensorIndex : std::size_t { kEmTip = 0, kEm20cm = 1, kEmHandle = 2, kEmSigmoid = 3 };
+enum EmSensorIndex : std::size_t {
+    kEmTip = 0,
+    kEm20cm = 1,
+    kEmHandle = 2,
+    kEmSigmoid = 3
+};
 
 struct WorldReadout {
-  double time_s = 0;
-  double handle_force_N = 0;
-  double handle_torque_Nmm = 0;
-  double insertion_mm = 0;
-  double roll_rad = 0;
-  std::array<Pose, 4> em;
-  Eigen::Vector3d tip_force_N = Eigen::Vector3d::Zero();  ///< resultant wall force on the tip stretch
-  double tip_path_mm = 0;          ///< the tip's closest centerline point, arc length from the anus
-  std::string tip_region;          ///< region there
+    double time_s = 0;
+    double handle_force_N = 0;
+    double handle_torque_Nmm = 0;
+    double insertion_mm = 0;
+    double roll_rad = 0;
+    std::array<Pose, 4> em;
+    Eigen::Vector3d tip_force_N =
+        Eigen::Vector3d::Zero();  ///< resultant wall force on the tip stretch
+    double tip_path_mm = 0;       ///< the tip's closest centerline point, arc length from the anus
+    std::string tip_region;       ///< region there
 };
 
 /// Reads the world after a step. Keeps the tip's place along the colon from one call to the
 /// next, so the tip is never matched to another turn of a loop that happens to be near.
 class WorldReader {
- public:
-  explicit WorldReader(const model::World& world);
-  WorldReadout read(const model::World& world);
-  /// A snapshot for snapshots.json: the inserted scope, the displaced colon, the loaded contacts.
-  nlohmann::ordered_json snapshot(const model::World& world, const std::string& label) const;
-  /// The colon at rest for snapshots.json.
-  static nlohmann::ordered_json colon_json(const model::ColonTube& colon);
+public:
+    explicit WorldReader(const model::World& world);
+    WorldReadout read(const model::World& world);
+    /// A snapshot for snapshots.json: the inserted scope, the displaced colon, the loaded contacts.
+    nlohmann::ordered_json snapshot(const model::World& world, const std::string& label) const;
+    /// The colon at rest for snapshots.json.
+    static nlohmann::ordered_json colon_json(const model::ColonTube& colon);
 
- private:
-  double locate_tip(const Eigen::Vector3d& tip_mm, std::string& region);
-  const model::ColonTube* colon_ = nullptr;  // the world's, at rest, body frame
-  std::size_t sigmoid_point_ = 0;
-  std::size_t node_20cm_ = 0;
-  double tip_path_mm_ = 0;
+private:
+    double locate_tip(const Eigen::Vector3d& tip_mm, std::string& region);
+    const model::ColonTube* colon_ = nullptr;  // the world's, at rest, body frame
+    std::size_t sigmoid_point_ = 0;
+    std::size_t node_20cm_ = 0;
+    double tip_path_mm_ = 0;
 };
 
 /// Linear blend of two readouts (positions, forces, handle signals; orientations by nlerp):

@@ -24,40 +24,46 @@ using Mat7x12 = Eigen::Matrix<double, 7, 12>;
 
 /// What an element remembers of its stress-free configuration.
 struct CorotationalReference {
-  double length_mm = 0;
-  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< E0: reference local frame (Eq. 4.3)
-  Mat7 local_stiffness;  ///< Eq. (4.2) restricted to the 7 deformational DOFs [u2, th_a, th_b]
-  Mat12 local_mass;      ///< Eq. (4.5), local frame
+    double length_mm = 0;
+    Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< E0: reference local frame (Eq. 4.3)
+    Mat7 local_stiffness;  ///< Eq. (4.2) restricted to the 7 deformational DOFs [u2, th_a, th_b]
+    Mat12 local_mass;      ///< Eq. (4.5), local frame
 };
 
-CorotationalReference make_corotational_reference(const BeamSection& section, const Eigen::Vector3d& node_a_mm,
+CorotationalReference make_corotational_reference(const BeamSection& section,
+                                                  const Eigen::Vector3d& node_a_mm,
                                                   const Eigen::Vector3d& node_b_mm);
 
 /// Current kinematics of one element.
 struct CorotationalKinematics {
-  Eigen::Matrix3d frame;  ///< R_r = [r1 r2 r3], r1 along the current chord
-  double length_mm = 0;
-  Vec7 deformation;       ///< [u mm, theta_a rad (3), theta_b rad (3)]
-  Mat7x12 b_matrix;       ///< d(deformation) / d(global variables)
+    Eigen::Matrix3d frame;  ///< R_r = [r1 r2 r3], r1 along the current chord
+    double length_mm = 0;
+    Vec7 deformation;  ///< [u mm, theta_a rad (3), theta_b rad (3)]
+    Mat7x12 b_matrix;  ///< d(deformation) / d(global variables)
 };
 
 /// Node rotations are total rotations from the reference configuration (identity at start).
-CorotationalKinematics corotational_kinematics(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,
-                                               const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
+CorotationalKinematics corotational_kinematics(const CorotationalReference& ref,
+                                               const Eigen::Vector3d& x_a_mm,
+                                               const Eigen::Matrix3d& rotation_a,
+                                               const Eigen::Vector3d& x_b_mm,
                                                const Eigen::Matrix3d& rotation_b);
 
 struct CorotationalResponse {
-  CorotationalKinematics kinematics;
-  Vec7 local_force;           ///< [N (N), m_a (N mm), m_b (N mm)]
-  Vec12 internal_force;       ///< global [f_a N, m_a N mm, f_b, m_b]
-  Mat12 material_tangent;     ///< B^T K_l B (symmetric, positive semi-definite)
-  Mat12 geometric_tangent;    ///< d(B^T)/dq f_l: stress stiffening / softening of the rotating frame
+    CorotationalKinematics kinematics;
+    Vec7 local_force;        ///< [N (N), m_a (N mm), m_b (N mm)]
+    Vec12 internal_force;    ///< global [f_a N, m_a N mm, f_b, m_b]
+    Mat12 material_tangent;  ///< B^T K_l B (symmetric, positive semi-definite)
+    Mat12
+        geometric_tangent;  ///< d(B^T)/dq f_l: stress stiffening / softening of the rotating frame
 };
 
 /// Internal force and the exact consistent tangent (material + geometric, Battini & Pacoste
 /// 2002 Sec. 5, derived here with global vectors; checked against finite differences in tests).
-CorotationalResponse corotational_response(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,
-                                           const Eigen::Matrix3d& rotation_a, const Eigen::Vector3d& x_b_mm,
+CorotationalResponse corotational_response(const CorotationalReference& ref,
+                                           const Eigen::Vector3d& x_a_mm,
+                                           const Eigen::Matrix3d& rotation_a,
+                                           const Eigen::Vector3d& x_b_mm,
                                            const Eigen::Matrix3d& rotation_b, bool with_tangent);
 
 using Vec9 = Eigen::Matrix<double, 9, 1>;
@@ -69,14 +75,14 @@ using Mat7x9 = Eigen::Matrix<double, 7, 9, Eigen::RowMajor>;  ///< row-major: ro
 /// minus the dx_a columns; the element's forces balance, so the f_b row of the internal force
 /// and of the tangents is minus the f_a row. Rows and columns are [x_a, w_a, w_b].
 struct CorotationalReducedResponse {
-  Eigen::Matrix3d frame;      ///< R_r
-  double length_mm = 0;
-  Vec7 deformation;
-  Vec7 local_force;
-  Mat7x9 b_matrix;
-  Vec9 internal_force;        ///< [f_a, m_a, m_b]; f_b = -f_a
-  Mat9 material_tangent;      ///< only filled with `with_tangent`
-  Mat9 geometric_tangent;     ///< only filled with `with_tangent`
+    Eigen::Matrix3d frame;  ///< R_r
+    double length_mm = 0;
+    Vec7 deformation;
+    Vec7 local_force;
+    Mat7x9 b_matrix;
+    Vec9 internal_force;     ///< [f_a, m_a, m_b]; f_b = -f_a
+    Mat9 material_tangent;   ///< only filled with `with_tangent`
+    Mat9 geometric_tangent;  ///< only filled with `with_tangent`
 };
 
 void corotational_response_reduced(const CorotationalReference& ref, const Eigen::Vector3d& x_a_mm,

@@ -24,6 +24,7 @@ Mat12 timoshenko_local_mass(const BeamSection& section, double length_mm);
 /// Reference local frame of an element from node a to node b, thesis Eq. (4.3) / App. F:
 /// columns e1 (along the element), e2 (horizontal, e2 = z x e1 normalised), e3 = e1 x e2.
 /// Vertical element (along global +/-z): App. F's special case, e2 = global y.
-Eigen::Matrix3d reference_element_frame(const Eigen::Vector3d& node_a_mm, const Eigen::Vector3d& node_b_mm);
+Eigen::Matrix3d reference_element_frame(const Eigen::Vector3d& node_a_mm,
+                                        const Eigen::Vector3d& node_b_mm);
 
 }  // namespace scopekin::model

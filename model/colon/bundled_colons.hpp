@@ -18,12 +18,13 @@ namespace scopekin::model {
 ColonTube default_colon(double scope_radius_mm);
 
 /// A straight tube along +x from the origin (region `region`), for tests.
-ColonTube straight_tube(double length_mm, double inner_radius_mm, ColonRegion region, double scope_radius_mm);
+ColonTube straight_tube(double length_mm, double inner_radius_mm, ColonRegion region,
+                        double scope_radius_mm);
 
 /// A straight entry of `lead_mm` along +x, then a circular bend of centerline radius
 /// `bend_radius_mm` through `bend_angle_rad` in the x-y plane (turning towards +y), then a straight
 /// exit of `lead_mm`; for tests of contact on the outer wall and of self-locking.
-ColonTube single_bend(double lead_mm, double bend_radius_mm, double bend_angle_rad, double inner_radius_mm,
-                      ColonRegion region, double scope_radius_mm);
+ColonTube single_bend(double lead_mm, double bend_radius_mm, double bend_angle_rad,
+                      double inner_radius_mm, ColonRegion region, double scope_radius_mm);
 
 }  // namespace scopekin::model

@@ -19,17 +19,19 @@ inline constexpr double kColonPoissonRatio = 0.49;
 inline constexpr double kThinTubeShearCorrection = 0.5;
 
 /// Hollow circular section: inner radius r, wall t, Young's modulus E [kPa]; stiffness only.
-BeamSection hollow_colon_section(double inner_radius_mm, double wall_thickness_mm, double young_modulus_kPa);
+BeamSection hollow_colon_section(double inner_radius_mm, double wall_thickness_mm,
+                                 double young_modulus_kPa);
 
 struct ColonStructure {
-  ScopeBeam beam;                      ///< one node per centerline point
-  std::vector<NodeSupport> supports;   ///< clamps of the fixed regions
-  BeamLoads loads;                     ///< the mesentery springs (no gravity: the tube is carried)
-  std::vector<bool> mobile;            ///< per node: hangs on a mesentery
+    ScopeBeam beam;                     ///< one node per centerline point
+    std::vector<NodeSupport> supports;  ///< clamps of the fixed regions
+    BeamLoads loads;                    ///< the mesentery springs (no gravity: the tube is carried)
+    std::vector<bool> mobile;           ///< per node: hangs on a mesentery
 };
 
 /// Builds the colon structure; `properties` per region, in kColonRegionsInOrder order.
-ColonStructure build_colon_structure(const ColonTube& tube, const std::array<ColonRegionProperties, 8>& properties);
+ColonStructure build_colon_structure(const ColonTube& tube,
+                                     const std::array<ColonRegionProperties, 8>& properties);
 std::array<ColonRegionProperties, 8> default_colon_properties();
 
 }  // namespace scopekin::model

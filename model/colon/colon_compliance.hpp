@@ -16,33 +16,37 @@ namespace scopekin::model {
 
 /// A force on the colon at a point of its centerline.
 struct ColonPointForce {
-  std::size_t segment = 0;
-  double weight = 0;  ///< in [0, 1] along the segment
-  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();
+    std::size_t segment = 0;
+    double weight = 0;  ///< in [0, 1] along the segment
+    Eigen::Vector3d force_N = Eigen::Vector3d::Zero();
 };
 
 class ColonCompliance {
- public:
-  /// Throws ModelError if the colon is not held (a region that is neither clamped nor on a
-  /// mesentery spring makes K_c singular).
-  explicit ColonCompliance(const ColonStructure& colon);
-  std::size_t node_count() const { return nodes_; }
-  /// Translational compliance between nodes i and j [mm/N].
-  Eigen::Matrix3d node_block(std::size_t i, std::size_t j) const {
-    return compliance_.block<3, 3>(static_cast<Eigen::Index>(3 * i), static_cast<Eigen::Index>(3 * j));
-  }
-  /// Compliance between two centerline points (segment, weight) [mm/N].
-  Eigen::Matrix3d point_block(std::size_t segment_a, double weight_a, std::size_t segment_b, double weight_b) const;
-  /// Displacement of every node [mm] under the given point forces.
-  void displacement(const std::vector<ColonPointForce>& forces, std::vector<Eigen::Vector3d>& displacement_mm) const;
-  /// Displacement of one node [mm] under the given point forces: the same sum as displacement()
-  /// restricted to the node's rows, O(forces) instead of O(nodes^2) (the sensors read one node
-  /// every step).
-  Eigen::Vector3d node_displacement(std::size_t node, const std::vector<ColonPointForce>& forces) const;
+public:
+    /// Throws ModelError if the colon is not held (a region that is neither clamped nor on a
+    /// mesentery spring makes K_c singular).
+    explicit ColonCompliance(const ColonStructure& colon);
+    std::size_t node_count() const { return nodes_; }
+    /// Translational compliance between nodes i and j [mm/N].
+    Eigen::Matrix3d node_block(std::size_t i, std::size_t j) const {
+        return compliance_.block<3, 3>(static_cast<Eigen::Index>(3 * i),
+                                       static_cast<Eigen::Index>(3 * j));
+    }
+    /// Compliance between two centerline points (segment, weight) [mm/N].
+    Eigen::Matrix3d point_block(std::size_t segment_a, double weight_a, std::size_t segment_b,
+                                double weight_b) const;
+    /// Displacement of every node [mm] under the given point forces.
+    void displacement(const std::vector<ColonPointForce>& forces,
+                      std::vector<Eigen::Vector3d>& displacement_mm) const;
+    /// Displacement of one node [mm] under the given point forces: the same sum as displacement()
+    /// restricted to the node's rows, O(forces) instead of O(nodes^2) (the sensors read one node
+    /// every step).
+    Eigen::Vector3d node_displacement(std::size_t node,
+                                      const std::vector<ColonPointForce>& forces) const;
 
- private:
-  std::size_t nodes_ = 0;
-  Eigen::MatrixXd compliance_;
+private:
+    std::size_t nodes_ = 0;
+    Eigen::MatrixXd compliance_;
 };
 
 }  // namespace scopekin::model

@@ -7,11 +7,21 @@
 
 namespace scopekin::model {
 
-enum class ColonRegion { rectum, sigmoid, descending, splenic_flexure, transverse, hepatic_flexure, ascending, cecum };
+enum class ColonRegion {
+    rectum,
+    sigmoid,
+    descending,
+    splenic_flexure,
+    transverse,
+    hepatic_flexure,
+    ascending,
+    cecum
+};
 
 inline constexpr std::array<ColonRegion, 8> kColonRegionsInOrder{
-    ColonRegion::rectum,     ColonRegion::sigmoid,         ColonRegion::descending, ColonRegion::splenic_flexure,
-    ColonRegion::transverse, ColonRegion::hepatic_flexure, ColonRegion::ascending,  ColonRegion::cecum};
+    ColonRegion::rectum,          ColonRegion::sigmoid,    ColonRegion::descending,
+    ColonRegion::splenic_flexure, ColonRegion::transverse, ColonRegion::hepatic_flexure,
+    ColonRegion::ascending,       ColonRegion::cecum};
 
 std::string_view region_name(ColonRegion region);
 std::optional<ColonRegion> region_from_name(std::string_view name);
@@ -19,14 +29,17 @@ std::optional<ColonRegion> region_from_name(std::string_view name);
 /// How a region hangs in the abdomen: fixed to the retroperitoneum (rectum, descending,
 /// ascending) or mobile on a mesentery (sigmoid, transverse; the flexures and the cecum are
 /// treated as fixed: they are tethered by ligaments).
-enum class ColonAttachment { fixed, mesentery };
+enum class ColonAttachment {
+    fixed,
+    mesentery
+};
 
 struct ColonRegionProperties {
-  double young_modulus_kPa = 0;          ///< longitudinal, porcine, thesis Table 4.6
-  double wall_thickness_mm = 0;
-  ColonAttachment attachment = ColonAttachment::fixed;
-  /// Mesentery stiffness per unit length of colon [N/mm per mm] (0 for fixed regions).
-  double mesentery_stiffness_N_per_mm2 = 0;
+    double young_modulus_kPa = 0;  ///< longitudinal, porcine, thesis Table 4.6
+    double wall_thickness_mm = 0;
+    ColonAttachment attachment = ColonAttachment::fixed;
+    /// Mesentery stiffness per unit length of colon [N/mm per mm] (0 for fixed regions).
+    double mesentery_stiffness_N_per_mm2 = 0;
 };
 
 /// Defaults. Young's modulus: thesis Table 4.6, longitudinal (flexures take the neighbouring

@@ -16,23 +16,24 @@
 namespace scopekin::model {
 
 struct ContactCandidate {
-  std::size_t scope_node = 0;
-  std::size_t colon_segment = 0;  ///< centerline segment j (points j, j+1)
-  double colon_weight = 0;        ///< position on the segment in [0, 1] (0 at point j)
-  Eigen::Vector3d centerline_point_mm = Eigen::Vector3d::Zero();
-  double gap_mm = 0;
-  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< columns n, t, s
-  ColonRegion region = ColonRegion::rectum;
+    std::size_t scope_node = 0;
+    std::size_t colon_segment = 0;  ///< centerline segment j (points j, j+1)
+    double colon_weight = 0;        ///< position on the segment in [0, 1] (0 at point j)
+    Eigen::Vector3d centerline_point_mm = Eigen::Vector3d::Zero();
+    double gap_mm = 0;
+    Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< columns n, t, s
+    ColonRegion region = ColonRegion::rectum;
 };
 
 struct ContactDetectionSettings {
-  double scope_radius_mm = 6.65;
-  /// Nodes closer to the wall than this become candidates (the solver decides if they touch).
-  double activation_distance_mm = 2.0;
+    double scope_radius_mm = 6.65;
+    /// Nodes closer to the wall than this become candidates (the solver decides if they touch).
+    double activation_distance_mm = 2.0;
 };
 
 /// `colon` holds the colon's current node positions (one node per point of `tube`).
-std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const ScopeBeam& colon, const ColonTube& tube,
+std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const ScopeBeam& colon,
+                                              const ColonTube& tube,
                                               const ContactDetectionSettings& settings);
 
 /// Where each scope node was on the centerline last time (-1: not yet tracked), so that time
@@ -41,14 +42,17 @@ std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const Scop
 /// loops of the sigmoid). A node whose nearby search finds nothing within one lumen diameter
 /// falls back to the full search.
 struct CenterlineTracking {
-  std::vector<long> segment;
-  std::size_t window_segments = 3;
+    std::vector<long> segment;
+    std::size_t window_segments = 3;
 };
 
 /// The same detection against colon centerline positions (one per tube point), skipping the
 /// scope nodes flagged in `skip_node` (may be empty), with tracking.
-std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const std::vector<Eigen::Vector3d>& colon_mm,
-                                              const ColonTube& tube, const ContactDetectionSettings& settings,
-                                              const std::vector<bool>& skip_node, CenterlineTracking* tracking);
+std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope,
+                                              const std::vector<Eigen::Vector3d>& colon_mm,
+                                              const ColonTube& tube,
+                                              const ContactDetectionSettings& settings,
+                                              const std::vector<bool>& skip_node,
+                                              CenterlineTracking* tracking);
 
 }  // namespace scopekin::model

@@ -18,9 +18,11 @@ std::vector<std::string> world_effect_names();
 
 /// One effect from {"name": "<identifier>", <parameters>} (every parameter optional: EFFECTS.md
 /// gives the defaults). `path` names the object in messages, e.g. "s.json: truth_effects[0]".
-std::shared_ptr<const WorldEffect> make_world_effect(const nlohmann::json& spec, const std::string& path);
+std::shared_ptr<const WorldEffect> make_world_effect(const nlohmann::json& spec,
+                                                     const std::string& path);
 
 /// A list of effects ([{...}, ...]); `path` names the list. Each name at most once.
-std::vector<std::shared_ptr<const WorldEffect>> read_world_effects(const nlohmann::json& list, const std::string& path);
+std::vector<std::shared_ptr<const WorldEffect>> read_world_effects(const nlohmann::json& list,
+                                                                   const std::string& path);
 
 }  // namespace scopekin::model

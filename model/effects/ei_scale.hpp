@@ -9,24 +9,25 @@
 namespace scopekin::model {
 
 class EiScale : public WorldEffect {
- public:
-  static constexpr const char* kName = "ei_scale";
-  struct Parameters {
-    /// EI multiplier; 1 = unchanged. Default 0.85: ~15 % lower at body temperature (thesis 4.2.2).
-    double factor = 0.85;
-    void validate(const effects::FieldName& field) const;
-  };
+public:
+    static constexpr const char* kName = "ei_scale";
+    struct Parameters {
+        /// EI multiplier; 1 = unchanged. Default 0.85: ~15 % lower at body temperature (thesis 4.2.2).
+        double factor = 0.85;
+        void validate(const effects::FieldName& field) const;
+    };
 
-  explicit EiScale(const Parameters& p);
-  static std::shared_ptr<const WorldEffect> read(const io::JsonObject& o);
+    explicit EiScale(const Parameters& p);
+    static std::shared_ptr<const WorldEffect> read(const io::JsonObject& o);
 
-  std::string name() const override { return kName; }
-  nlohmann::json parameters() const override;
-  /// EI_y and EI_z times the factor; EA, GJ, shear stiffness and inertias unchanged (EFFECTS.md).
-  void adjust_scope_sections(std::vector<BeamSection>& sections, double scope_length_mm) const override;
+    std::string name() const override { return kName; }
+    nlohmann::json parameters() const override;
+    /// EI_y and EI_z times the factor; EA, GJ, shear stiffness and inertias unchanged (EFFECTS.md).
+    void adjust_scope_sections(std::vector<BeamSection>& sections,
+                               double scope_length_mm) const override;
 
- private:
-  Parameters p_;
+private:
+    Parameters p_;
 };
 
 }  // namespace scopekin::model

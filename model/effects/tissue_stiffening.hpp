@@ -13,28 +13,28 @@
 namespace scopekin::model {
 
 class TissueStiffening : public WorldEffect {
- public:
-  static constexpr const char* kName = "tissue_stiffening";
-  struct Parameters {
-    /// b = 1 / f_ref [1/N]; 0 = linear wall. Default 1/N (f_ref = 1 N): stated guess.
-    double stiffening_per_N = 1.0;
-    void validate(const effects::FieldName& field) const;
-  };
+public:
+    static constexpr const char* kName = "tissue_stiffening";
+    struct Parameters {
+        /// b = 1 / f_ref [1/N]; 0 = linear wall. Default 1/N (f_ref = 1 N): stated guess.
+        double stiffening_per_N = 1.0;
+        void validate(const effects::FieldName& field) const;
+    };
 
-  explicit TissueStiffening(const Parameters& p);
-  /// Reads "stiffening_per_N" (b) or "reference_force_N" (f_ref = 1 / b), at most one of them.
-  static std::shared_ptr<const WorldEffect> read(const io::JsonObject& o);
+    explicit TissueStiffening(const Parameters& p);
+    /// Reads "stiffening_per_N" (b) or "reference_force_N" (f_ref = 1 / b), at most one of them.
+    static std::shared_ptr<const WorldEffect> read(const io::JsonObject& o);
 
-  std::string name() const override { return kName; }
-  nlohmann::json parameters() const override;
-  double wall_compliance_mm_per_N(const ContactWallView& contact) const override;
-  /// Secant compliance c0 ln(1 + b f) / (b f) at normal force f [mm/N].
-  double secant_compliance_mm_per_N(double base_compliance_mm_per_N, double normal_force_N) const;
-  /// Indentation delta(f) = c0 f_ref ln(1 + f / f_ref) [mm].
-  double indentation_mm(double base_compliance_mm_per_N, double normal_force_N) const;
+    std::string name() const override { return kName; }
+    nlohmann::json parameters() const override;
+    double wall_compliance_mm_per_N(const ContactWallView& contact) const override;
+    /// Secant compliance c0 ln(1 + b f) / (b f) at normal force f [mm/N].
+    double secant_compliance_mm_per_N(double base_compliance_mm_per_N, double normal_force_N) const;
+    /// Indentation delta(f) = c0 f_ref ln(1 + f / f_ref) [mm].
+    double indentation_mm(double base_compliance_mm_per_N, double normal_force_N) const;
 
- private:
-  Parameters p_;
+private:
+    Parameters p_;
 };
 
 }  // namespace scopekin::model

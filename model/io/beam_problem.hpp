@@ -14,11 +14,11 @@
 namespace scopekin::model::io {
 
 struct BeamProblem {
-  ScopeBeam beam;
-  BeamLoads loads;
-  std::vector<NodeSupport> supports;
-  StaticSettings settings;
-  std::vector<std::size_t> output_nodes;  ///< nodes reported in the result (default: all)
+    ScopeBeam beam;
+    BeamLoads loads;
+    std::vector<NodeSupport> supports;
+    StaticSettings settings;
+    std::vector<std::size_t> output_nodes;  ///< nodes reported in the result (default: all)
 };
 
 /// Reads and validates; `source` names the file in messages.

@@ -21,18 +21,18 @@
 namespace scopekin::model {
 
 class SelectedInverse {
- public:
-  /// Fills `blocks` (3k x 3k, k = nodes.size()) with the translational blocks of A^-1 between
-  /// the given nodes, which must be strictly increasing and < A's block count. Returns false if
-  /// a Schur complement is singular (A not invertible, e.g. an unsupported beam).
-  bool translational_blocks(const BlockTridiagonalMatrix& a, const std::vector<std::size_t>& nodes,
-                            Eigen::MatrixXd& blocks);
+public:
+    /// Fills `blocks` (3k x 3k, k = nodes.size()) with the translational blocks of A^-1 between
+    /// the given nodes, which must be strictly increasing and < A's block count. Returns false if
+    /// a Schur complement is singular (A not invertible, e.g. an unsupported beam).
+    bool translational_blocks(const BlockTridiagonalMatrix& a,
+                              const std::vector<std::size_t>& nodes, Eigen::MatrixXd& blocks);
 
- private:
-  std::vector<Mat6> forward_step_;   // P_i
-  std::vector<Mat6> backward_step_;  // Q_i
-  std::vector<Mat6> forward_schur_;  // S_i
-  std::vector<Mat6> backward_schur_; // T_i
+private:
+    std::vector<Mat6> forward_step_;    // P_i
+    std::vector<Mat6> backward_step_;   // Q_i
+    std::vector<Mat6> forward_schur_;   // S_i
+    std::vector<Mat6> backward_schur_;  // T_i
 };
 
 }  // namespace scopekin::model

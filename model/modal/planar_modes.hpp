@@ -11,13 +11,14 @@
 namespace scopekin::model {
 
 struct PlanarMode {
-  double frequency_hz = 0;
-  /// Modal damping ratio phi^T C phi / (2 w phi^T M phi) with the model's damping matrix
-  /// C = a' M + b' K assembled the same way as in the dynamic solver.
-  double damping_ratio = 0;
+    double frequency_hz = 0;
+    /// Modal damping ratio phi^T C phi / (2 w phi^T M phi) with the model's damping matrix
+    /// C = a' M + b' K assembled the same way as in the dynamic solver.
+    double damping_ratio = 0;
 };
 
 /// The lowest `count` modes; throws ModelError if the beam is not straight along x.
-std::vector<PlanarMode> planar_bending_modes(const ScopeBeam& beam, const RayleighDamping& damping, std::size_t count);
+std::vector<PlanarMode> planar_bending_modes(const ScopeBeam& beam, const RayleighDamping& damping,
+                                             std::size_t count);
 
 }  // namespace scopekin::model

@@ -22,24 +22,25 @@ namespace scopekin::model {
 /// One training run: a travel run probed at depths (advancing or withdrawing), or a hold run
 /// probed at times while the hand holds the depth still.
 struct ReductionSegmentSpec {
-  Scenario scenario;           ///< a world scenario under position control (no push)
-  int kind = kinetics::kSegmentTravel;
-  int direction = 1;           ///< travel: +1 probed while advancing, -1 while withdrawing
-  double depth_from_mm = 20.0; ///< travel: first knot the run passes
-  double depth_to_mm = 760.0;  ///< travel: last knot it passes
-  double step_mm = 1.0;        ///< travel: knot spacing (a multiple of the run's depth per solver step)
-  double after_s = 0.0;        ///< travel: knots are probed from this time on; hold: the hold's start
-  double duration_s = 0.0;     ///< hold: knots from after_s to after_s + duration_s
-  double step_s = 0.05;        ///< hold: knot spacing (a multiple of the solver step)
+    Scenario scenario;  ///< a world scenario under position control (no push)
+    int kind = kinetics::kSegmentTravel;
+    int direction = 1;            ///< travel: +1 probed while advancing, -1 while withdrawing
+    double depth_from_mm = 20.0;  ///< travel: first knot the run passes
+    double depth_to_mm = 760.0;   ///< travel: last knot it passes
+    double step_mm = 1.0;  ///< travel: knot spacing (a multiple of the run's depth per solver step)
+    double after_s = 0.0;  ///< travel: knots are probed from this time on; hold: the hold's start
+    double duration_s = 0.0;  ///< hold: knots from after_s to after_s + duration_s
+    double step_s = 0.05;     ///< hold: knot spacing (a multiple of the solver step)
 };
 
 struct ReductionSettings {
-  std::size_t stations = 12;           ///< K: station j is j * spacing from the tip
-  double station_spacing_mm = 50.0;
-  std::size_t compliance_every = 10;   ///< knots per compliance record interval
-  std::vector<ReductionSegmentSpec> segments;  ///< segment 0 advances over the model's depth range
-  std::string source;                  ///< the spec file, for messages and provenance
-  void validate() const;
+    std::size_t stations = 12;  ///< K: station j is j * spacing from the tip
+    double station_spacing_mm = 50.0;
+    std::size_t compliance_every = 10;  ///< knots per compliance record interval
+    std::vector<ReductionSegmentSpec>
+        segments;        ///< segment 0 advances over the model's depth range
+    std::string source;  ///< the spec file, for messages and provenance
+    void validate() const;
 };
 
 /// Reads a reduction spec (model/reduction/training.json): stations, spacing, compliance_every
@@ -50,31 +51,35 @@ ReductionSettings read_reduction_spec(const std::string& filename);
 
 /// The reduced model's data in double: header + knot and compliance records.
 class ReducedModelData {
- public:
-  ReductionSettings settings;
-  kinetics::ReducedModelHeader<double> head;
-  std::vector<std::vector<double>> knots;       ///< [knot][index in knot record]
-  std::vector<std::vector<double>> compliances; ///< [record][index in compliance record]
+public:
+    ReductionSettings settings;
+    kinetics::ReducedModelHeader<double> head;
+    std::vector<std::vector<double>> knots;        ///< [knot][index in knot record]
+    std::vector<std::vector<double>> compliances;  ///< [record][index in compliance record]
 
-  const kinetics::ReducedModelHeader<double>& header() const { return head; }
-  double value(std::size_t knot, std::size_t index) const { return knots[knot][index]; }
-  double compliance(std::size_t record, std::size_t index) const { return compliances[record][index]; }
+    const kinetics::ReducedModelHeader<double>& header() const { return head; }
+    double value(std::size_t knot, std::size_t index) const { return knots[knot][index]; }
+    double compliance(std::size_t record, std::size_t index) const {
+        return compliances[record][index];
+    }
 };
 
 struct ReductionProgress {
-  std::size_t segment = 0;
-  std::size_t segments = 0;
-  std::size_t knot = 0;   ///< knots probed in this segment
-  std::size_t knots = 0;  ///< knots of this segment
+    std::size_t segment = 0;
+    std::size_t segments = 0;
+    std::size_t knot = 0;   ///< knots probed in this segment
+    std::size_t knots = 0;  ///< knots of this segment
 };
 
 /// Runs every segment's scenario and probes its knots. Throws ModelError if a run fails, never
 /// reaches a knot, or passes one between solver steps.
-ReducedModelData build_reduced_model(const ReductionSettings& settings,
-                                     const std::function<void(const ReductionProgress&)>& on_progress = {});
+ReducedModelData build_reduced_model(
+    const ReductionSettings& settings,
+    const std::function<void(const ReductionProgress&)>& on_progress = {});
 
 /// Scope nodes of the stations, station 0 (the tip) first.
-std::vector<std::size_t> station_nodes(const World& world, std::size_t stations, double station_spacing_mm);
+std::vector<std::size_t> station_nodes(const World& world, std::size_t stations,
+                                       double station_spacing_mm);
 
 /// The full-order world's contact forces gathered per station: the resultant of the wall forces
 /// on the scope over the station's stretch (arc from the tip in [sigma - spacing/2, sigma +

@@ -14,10 +14,10 @@
 namespace scopekin::model {
 
 struct ReducedTablesRaw {
-  kinetics::ReducedModelHeader<std::int32_t> head;  ///< Q16.16 raw (counts and directions plain)
-  std::vector<std::int32_t> knot_values;            ///< knot records one after the other
-  std::vector<std::int32_t> compliance_values;      ///< compliance records one after the other
-  std::uint32_t checksum = 0;
+    kinetics::ReducedModelHeader<std::int32_t> head;  ///< Q16.16 raw (counts and directions plain)
+    std::vector<std::int32_t> knot_values;            ///< knot records one after the other
+    std::vector<std::int32_t> compliance_values;      ///< compliance records one after the other
+    std::uint32_t checksum = 0;
 };
 
 /// Q16.16 raw of x, rounded to nearest (ties away from zero). Throws ModelError naming `what` if
@@ -29,6 +29,7 @@ ReducedTablesRaw to_q16_tables(const ReducedModelData& data);
 
 /// Writes the C++ source (deterministic text; `provenance` goes into a comment and the tables'
 /// source string).
-void write_reduced_tables_source(const ReducedTablesRaw& tables, const std::string& provenance, std::ostream& out);
+void write_reduced_tables_source(const ReducedTablesRaw& tables, const std::string& provenance,
+                                 std::ostream& out);
 
 }  // namespace scopekin::model

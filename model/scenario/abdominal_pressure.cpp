@@ -8,32 +8,41 @@
 
 namespace scopekin::model {
 
-AbdominalPressure::AbdominalPressure(std::vector<AbdominalPressureWindow> windows) : windows_(std::move(windows)) {
-  for (std::size_t i = 0; i < windows_.size(); ++i) {
-    const AbdominalPressureWindow& w = windows_[i];
-    const std::string at = "abdominal_pressure[" + std::to_string(i) + "]";
-    require_non_negative(w.start_s, at + ".start_s");
-    if (!(w.end_s > w.start_s)) throw ModelError(at + ".end_s: must be later than start_s");
-    if (w.regions.empty()) throw ModelError(at + ".regions: name at least one region");
-    effects::require_above_at_most(w.stiffness_N_per_mm2, 0.0, 1.0, at + ".stiffness_N_per_mm2");
-    effects::require_in(w.ramp_s, 0.0, w.end_s - w.start_s, at + ".ramp_s");
-  }
+AbdominalPressure::AbdominalPressure(std::vector<AbdominalPressureWindow> windows)
+    : windows_(std::move(windows)) {
+    for (std::size_t i = 0; i < windows_.size(); ++i) {
+        const AbdominalPressureWindow& w = windows_[i];
+        const std::string at = "abdominal_pressure[" + std::to_string(i) + "]";
+        require_non_negative(w.start_s, at + ".start_s");
+        if (!(w.end_s > w.start_s)) throw ModelError(at + ".end_s: must be later than start_s");
+        if (w.regions.empty()) throw ModelError(at + ".regions: name at least one region");
+        effects::require_above_at_most(w.stiffness_N_per_mm2, 0.0, 1.0,
+                                       at + ".stiffness_N_per_mm2");
+        effects::require_in(w.ramp_s, 0.0, w.end_s - w.start_s, at + ".ramp_s");
+    }
 }
 
-void AbdominalPressure::add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const {
-  const AbdominalPressureWindow* window = nullptr;
-  for (const AbdominalPressureWindow& w : windows_)
-    if (view.time_s >= w.start_s && view.time_s < w.end_s) window = &w;
-  if (window == nullptr) return;
-  const double pressed = window->ramp_s > 0.0 ? std::min(1.0, (view.time_s - window->start_s) / window->ramp_s) : 1.0;
-  const double k_N_per_mm2 = pressed * window->stiffness_N_per_mm2;
-  if (!(k_N_per_mm2 > 0.0)) return;  // the hand is only just touching
-  const std::vector<ColonRegion>& regions = window->regions;
-  effects::for_each_node_beyond_rest_wall(
-      view, [&](ColonRegion r) { return std::find(regions.begin(), regions.end(), r) != regions.end(); },
-      [&](const effects::NodeBeyondRestWall& n) {
-        loads.push_back({n.node, -k_N_per_mm2 * n.node_length_mm * n.excess_mm * n.outward, Eigen::Vector3d::Zero()});
-      });
+void AbdominalPressure::add_scope_loads(const WorldEffectView& view,
+                                        std::vector<NodalLoad>& loads) const {
+    const AbdominalPressureWindow* window = nullptr;
+    for (const AbdominalPressureWindow& w : windows_)
+        if (view.time_s >= w.start_s && view.time_s < w.end_s) window = &w;
+    if (window == nullptr) return;
+    const double pressed = window->ramp_s > 0.0
+                               ? std::min(1.0, (view.time_s - window->start_s) / window->ramp_s)
+                               : 1.0;
+    const double k_N_per_mm2 = pressed * window->stiffness_N_per_mm2;
+    if (!(k_N_per_mm2 > 0.0)) return;  // the hand is only just touching
+    const std::vector<ColonRegion>& regions = window->regions;
+    effects::for_each_node_beyond_rest_wall(
+        view,
+        [&](ColonRegion r) {
+            return std::find(regions.begin(), regions.end(), r) != regions.end();
+        },
+        [&](const effects::NodeBeyondRestWall& n) {
+            loads.push_back({n.node, -k_N_per_mm2 * n.node_length_mm * n.excess_mm * n.outward,
+                             Eigen::Vector3d::Zero()});
+        });
 }
 
 }  // namespace scopekin::model

@@ -23,22 +23,23 @@
 namespace scopekin::model {
 
 struct AbdominalPressureWindow {
-  double start_s = 0;
-  double end_s = 0;
-  std::vector<ColonRegion> regions{ColonRegion::sigmoid};
-  double stiffness_N_per_mm2 = 0.02;  ///< k
-  double ramp_s = 1.0;                ///< time to press in [s], at most the window; 0 = at once (scenario default: 1 s or the window)
+    double start_s = 0;
+    double end_s = 0;
+    std::vector<ColonRegion> regions{ColonRegion::sigmoid};
+    double stiffness_N_per_mm2 = 0.02;  ///< k
+    double ramp_s =
+        1.0;  ///< time to press in [s], at most the window; 0 = at once (scenario default: 1 s or the window)
 };
 
 class AbdominalPressure final : public WorldEffect {
- public:
-  /// Throws ModelError for a bad window (names "abdominal_pressure[i].field").
-  explicit AbdominalPressure(std::vector<AbdominalPressureWindow> windows);
-  std::string name() const override { return "abdominal_pressure"; }
-  void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
+public:
+    /// Throws ModelError for a bad window (names "abdominal_pressure[i].field").
+    explicit AbdominalPressure(std::vector<AbdominalPressureWindow> windows);
+    std::string name() const override { return "abdominal_pressure"; }
+    void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
 
- private:
-  std::vector<AbdominalPressureWindow> windows_;
+private:
+    std::vector<AbdominalPressureWindow> windows_;
 };
 
 }  // namespace scopekin::model

@@ -17,49 +17,52 @@
 #include "model/colon/colon_region.hpp"
 #include "model/colon/colon_tube.hpp"
 #include "model/io/beam_problem.hpp"
-#include "model/scenario/procedure.hpp"
 #include "model/scenario/abdominal_pressure.hpp"
+#include "model/scenario/procedure.hpp"
 #include "model/scenario/tip_steering.hpp"
 #include "model/world/world.hpp"
 
 namespace scopekin::model {
 
-enum class ScenarioKind { world, free_beam };
+enum class ScenarioKind {
+    world,
+    free_beam
+};
 
 struct ScenarioOutputs {
-  double sample_rate_Hz = 30.0;              ///< rows of the recording (the thesis's sensor rate)
-  std::vector<double> nodes_from_tip_mm;     ///< extra node position columns (nearest node)
-  bool contacts_file = false;                ///< also write one row per loaded contact per sample
+    double sample_rate_Hz = 30.0;           ///< rows of the recording (the thesis's sensor rate)
+    std::vector<double> nodes_from_tip_mm;  ///< extra node position columns (nearest node)
+    bool contacts_file = false;             ///< also write one row per loaded contact per sample
 };
 
 struct Scenario {
-  ScenarioKind kind = ScenarioKind::world;
-  std::string source;       ///< the file name (or what the caller named the document)
-  std::string description;
+    ScenarioKind kind = ScenarioKind::world;
+    std::string source;  ///< the file name (or what the caller named the document)
+    std::string description;
 
-  // World scenario.
-  std::optional<ColonTube> colon;
-  std::array<ColonRegionProperties, 8> colon_properties{};  ///< kColonRegionsInOrder order
-  std::string scope_model = "cf_q160l";
-  ScopeSpec scope;
-  WorldSettings settings;
-  Procedure procedure;
-  ScenarioOutputs outputs;
-  /// "truth_effects": physical effects the firmware's model lacks (model/effects/EFFECTS.md),
-  /// passed to the World by build_world. Empty = none.
-  std::vector<std::shared_ptr<const WorldEffect>> effects;
-  /// "steering": when the physician steers the tip down the lumen (model/scenario/tip_steering.hpp);
-  /// added to `effects` as a TipSteering.
-  std::vector<SteeringWindow> steering;
-  /// "abdominal_pressure": when and where the assistant presses on the abdomen
-  /// (model/scenario/abdominal_pressure.hpp); added to `effects` as an AbdominalPressure.
-  std::vector<AbdominalPressureWindow> abdominal_pressure;
-  /// "sensors": the host simulator's sensor models (host_sim/sensors/SENSORS.md), read there.
-  nlohmann::json sensors = nlohmann::json::object();
-  std::string sensors_path = "sensors";
+    // World scenario.
+    std::optional<ColonTube> colon;
+    std::array<ColonRegionProperties, 8> colon_properties{};  ///< kColonRegionsInOrder order
+    std::string scope_model = "cf_q160l";
+    ScopeSpec scope;
+    WorldSettings settings;
+    Procedure procedure;
+    ScenarioOutputs outputs;
+    /// "truth_effects": physical effects the firmware's model lacks (model/effects/EFFECTS.md),
+    /// passed to the World by build_world. Empty = none.
+    std::vector<std::shared_ptr<const WorldEffect>> effects;
+    /// "steering": when the physician steers the tip down the lumen (model/scenario/tip_steering.hpp);
+    /// added to `effects` as a TipSteering.
+    std::vector<SteeringWindow> steering;
+    /// "abdominal_pressure": when and where the assistant presses on the abdomen
+    /// (model/scenario/abdominal_pressure.hpp); added to `effects` as an AbdominalPressure.
+    std::vector<AbdominalPressureWindow> abdominal_pressure;
+    /// "sensors": the host simulator's sensor models (host_sim/sensors/SENSORS.md), read there.
+    nlohmann::json sensors = nlohmann::json::object();
+    std::string sensors_path = "sensors";
 
-  // Free beam scenario.
-  std::optional<io::BeamProblem> beam_problem;
+    // Free beam scenario.
+    std::optional<io::BeamProblem> beam_problem;
 };
 
 /// Reads and validates a scenario document; `source` names it in messages.
@@ -84,6 +87,7 @@ Scenario read_scenario_file(const std::string& filename);
 nlohmann::json with_model_file(nlohmann::json document, const std::string& filename);
 
 /// Scope node nearest to `arc_from_tip_mm` on a uniform scope of `elements` elements.
-std::size_t scope_node_from_tip(double arc_from_tip_mm, double scope_length_mm, std::size_t elements);
+std::size_t scope_node_from_tip(double arc_from_tip_mm, double scope_length_mm,
+                                std::size_t elements);
 
 }  // namespace scopekin::model

@@ -12,162 +12,177 @@ namespace {
 
 constexpr double kDegPerRad = 180.0 / M_PI;
 
-std::size_t region_index(ColonRegion r) { return static_cast<std::size_t>(r); }
+std::size_t region_index(ColonRegion r) {
+    return static_cast<std::size_t>(r);
+}
 
 }  // namespace
 
 std::unique_ptr<World> build_world(const Scenario& scenario) {
-  if (scenario.kind != ScenarioKind::world || !scenario.colon)
-    throw ModelError(scenario.source + ": not a world scenario (no colon)");
-  try {
-    return std::make_unique<World>(scenario.scope, *scenario.colon, scenario.colon_properties, scenario.settings,
-                                   scenario.effects);
-  } catch (const ModelError& e) {
-    throw ModelError(scenario.source + ": " + e.what());
-  }
+    if (scenario.kind != ScenarioKind::world || !scenario.colon)
+        throw ModelError(scenario.source + ": not a world scenario (no colon)");
+    try {
+        return std::make_unique<World>(scenario.scope, *scenario.colon, scenario.colon_properties,
+                                       scenario.settings, scenario.effects);
+    } catch (const ModelError& e) {
+        throw ModelError(scenario.source + ": " + e.what());
+    }
 }
 
 std::vector<std::size_t> output_nodes(const Scenario& scenario) {
-  std::vector<std::size_t> nodes;
-  for (double arc : scenario.outputs.nodes_from_tip_mm)
-    nodes.push_back(scope_node_from_tip(arc, scenario.scope.length_mm, scenario.scope.elements));
-  return nodes;
+    std::vector<std::size_t> nodes;
+    for (double arc : scenario.outputs.nodes_from_tip_mm)
+        nodes.push_back(
+            scope_node_from_tip(arc, scenario.scope.length_mm, scenario.scope.elements));
+    return nodes;
 }
 
 WorldRow sample_world(const World& world, const WorldStepReport* last_step,
                       const std::vector<std::size_t>& output_nodes) {
-  WorldRow s;
-  s.time_s = world.time_s();
-  s.handle_force_N = world.handle_force_N();
-  s.handle_torque_Nmm = world.handle_torque_Nmm();
-  s.insertion_depth_mm = world.insertion_depth_mm();
-  s.roll_deg = world.roll_rad() * kDegPerRad;
-  s.tip_mm = world.node_position_mm(world.scope_node_count() - 1);
-  for (std::size_t node : output_nodes) s.nodes_mm.push_back(world.node_position_mm(node));
-  double tip_arc = INFINITY;
-  for (const WorldContact& c : world.contacts()) {
-    if (!(c.normal_force_N > 0.0)) continue;
-    ++s.contact_count;
-    s.contact_force_total_N += c.normal_force_N;
-    s.contact_force_max_N = std::max(s.contact_force_max_N, c.normal_force_N);
-    double& region_max = s.max_contact_force_by_region_N[region_index(c.region)];
-    region_max = std::max(region_max, c.normal_force_N);
-    if (c.state == contact::ContactState::sticking) ++s.sticking_contacts;
-    if (c.state == contact::ContactState::slipping) ++s.slipping_contacts;
-    if (c.arc_from_tip_mm < tip_arc) {
-      tip_arc = c.arc_from_tip_mm;
-      s.has_tip_driving_angle = true;
-      s.tip_driving_angle_deg = c.driving_angle_rad * kDegPerRad;
+    WorldRow s;
+    s.time_s = world.time_s();
+    s.handle_force_N = world.handle_force_N();
+    s.handle_torque_Nmm = world.handle_torque_Nmm();
+    s.insertion_depth_mm = world.insertion_depth_mm();
+    s.roll_deg = world.roll_rad() * kDegPerRad;
+    s.tip_mm = world.node_position_mm(world.scope_node_count() - 1);
+    for (std::size_t node : output_nodes)
+        s.nodes_mm.push_back(world.node_position_mm(node));
+    double tip_arc = INFINITY;
+    for (const WorldContact& c : world.contacts()) {
+        if (!(c.normal_force_N > 0.0)) continue;
+        ++s.contact_count;
+        s.contact_force_total_N += c.normal_force_N;
+        s.contact_force_max_N = std::max(s.contact_force_max_N, c.normal_force_N);
+        double& region_max = s.max_contact_force_by_region_N[region_index(c.region)];
+        region_max = std::max(region_max, c.normal_force_N);
+        if (c.state == contact::ContactState::sticking) ++s.sticking_contacts;
+        if (c.state == contact::ContactState::slipping) ++s.slipping_contacts;
+        if (c.arc_from_tip_mm < tip_arc) {
+            tip_arc = c.arc_from_tip_mm;
+            s.has_tip_driving_angle = true;
+            s.tip_driving_angle_deg = c.driving_angle_rad * kDegPerRad;
+        }
     }
-  }
-  s.gs_sweeps = last_step != nullptr ? last_step->sweeps : 0;
-  return s;
+    s.gs_sweeps = last_step != nullptr ? last_step->sweeps : 0;
+    return s;
 }
 
-SimulationSummary run_simulation(World& world, const Scenario& scenario, const SimulationCallbacks& callbacks) {
-  const double h = world.time_step_s();
-  const double end = scenario.procedure.end_s();
-  const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
-  ProcedurePlayer player(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(), world.roll_rad());
-  return run_simulation(world, scenario, player, {0, step_count, end}, callbacks);
+SimulationSummary run_simulation(World& world, const Scenario& scenario,
+                                 const SimulationCallbacks& callbacks) {
+    const double h = world.time_step_s();
+    const double end = scenario.procedure.end_s();
+    const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
+    ProcedurePlayer player(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(),
+                           world.roll_rad());
+    return run_simulation(world, scenario, player, {0, step_count, end}, callbacks);
 }
 
 SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCommandSource& hand,
                                  const SimulationSpan& span, const SimulationCallbacks& callbacks) {
-  using Clock = std::chrono::steady_clock;
-  const auto wall_start = Clock::now();
-  SimulationSummary sum;
-  const double h = world.time_step_s();
-  const double end = span.end_s;
-  sum.end_time_s = end;
-  const double rate = scenario.outputs.sample_rate_Hz;
-  const double eps = 1e-6 * h;
-  const std::vector<std::size_t> nodes = output_nodes(scenario);
+    using Clock = std::chrono::steady_clock;
+    const auto wall_start = Clock::now();
+    SimulationSummary sum;
+    const double h = world.time_step_s();
+    const double end = span.end_s;
+    sum.end_time_s = end;
+    const double rate = scenario.outputs.sample_rate_Hz;
+    const double eps = 1e-6 * h;
+    const std::vector<std::size_t> nodes = output_nodes(scenario);
 
-  std::size_t next_sample = 0;  // index k of the next sample time k / rate
-  auto maybe_sample = [&](const WorldStepReport* last) {
-    if (world.time_s() + eps < static_cast<double>(next_sample) / rate) return;
-    if (callbacks.on_sample) callbacks.on_sample(sample_world(world, last, nodes), world);
-    ++sum.samples;
-    while (static_cast<double>(next_sample) / rate <= world.time_s() + eps) ++next_sample;
-  };
-  maybe_sample(nullptr);
+    std::size_t next_sample = 0;  // index k of the next sample time k / rate
+    auto maybe_sample = [&](const WorldStepReport* last) {
+        if (world.time_s() + eps < static_cast<double>(next_sample) / rate) return;
+        if (callbacks.on_sample) callbacks.on_sample(sample_world(world, last, nodes), world);
+        ++sum.samples;
+        while (static_cast<double>(next_sample) / rate <= world.time_s() + eps)
+            ++next_sample;
+    };
+    maybe_sample(nullptr);
 
-  std::size_t sweeps_total = 0;
-  sum.complete = true;
-  for (std::size_t step = span.first_step + 1; step <= span.last_step; ++step) {
-    const HandleCommand command =
-        hand.command_for_step(step, world.time_s(), h, world.insertion_depth_mm(), world.roll_rad());
-    const WorldStepReport report = world.step(command);
-    if (!report.ok) {
-      std::ostringstream m;
-      m << "t = " << world.time_s() + h << " s: the step failed: " << report.failure;
-      sum.complete = false;
-      sum.message = m.str();
-      sum.failure_time_s = world.time_s() + h;
-      break;
+    std::size_t sweeps_total = 0;
+    sum.complete = true;
+    for (std::size_t step = span.first_step + 1; step <= span.last_step; ++step) {
+        const HandleCommand command = hand.command_for_step(
+            step, world.time_s(), h, world.insertion_depth_mm(), world.roll_rad());
+        const WorldStepReport report = world.step(command);
+        if (!report.ok) {
+            std::ostringstream m;
+            m << "t = " << world.time_s() + h << " s: the step failed: " << report.failure;
+            sum.complete = false;
+            sum.message = m.str();
+            sum.failure_time_s = world.time_s() + h;
+            break;
+        }
+        ++sum.steps;
+        sweeps_total += report.sweeps;
+        sum.gs_sweeps_max = std::max(sum.gs_sweeps_max, report.sweeps);
+        sum.dropped_contacts_total += report.dropped_contacts;
+        if (report.material_tangent_fallback) ++sum.material_tangent_fallbacks;
+        sum.max_penetration_mm = std::max(sum.max_penetration_mm, report.max_penetration_mm);
+        sum.friction_work_Nmm += report.friction_work_Nmm;
+        sum.max_handle_force_N = std::max(sum.max_handle_force_N, std::abs(world.handle_force_N()));
+        sum.max_handle_torque_Nmm =
+            std::max(sum.max_handle_torque_Nmm, std::abs(world.handle_torque_Nmm()));
+        std::size_t loaded = 0;
+        const WorldContact* strongest = nullptr;
+        const WorldContact* deepest = nullptr;
+        for (const WorldContact& c : world.contacts()) {
+            if (deepest == nullptr || c.gap_mm < deepest->gap_mm) deepest = &c;
+            if (!(c.normal_force_N > 0.0)) continue;
+            ++loaded;
+            sum.max_contact_force_N = std::max(sum.max_contact_force_N, c.normal_force_N);
+            double& region_max = sum.max_contact_force_by_region_N[region_index(c.region)];
+            region_max = std::max(region_max, c.normal_force_N);
+            if (strongest == nullptr || c.normal_force_N > strongest->normal_force_N)
+                strongest = &c;
+        }
+        sum.max_simultaneous_contacts = std::max(sum.max_simultaneous_contacts, loaded);
+
+        // A step the solvers accepted may still be unphysical.
+        std::ostringstream unphysical;
+        if (strongest != nullptr && strongest->normal_force_N > kMaxPhysicalContactForce_N)
+            unphysical << "t = " << world.time_s() << " s: contact normal force "
+                       << strongest->normal_force_N << " N at " << strongest->arc_from_tip_mm
+                       << " mm from the tip (" << region_name(strongest->region) << ") exceeds "
+                       << kMaxPhysicalContactForce_N
+                       << " N: the run is no longer physical (check the procedure's forces and "
+                          "speeds, or reduce "
+                          "solver.time_step_s)";
+        else if (report.max_penetration_mm > kMaxPhysicalPenetration_mm) {
+            unphysical << "t = " << world.time_s() << " s: the scope penetrates the colon wall by "
+                       << report.max_penetration_mm << " mm";
+            if (deepest != nullptr)
+                unphysical << " at " << deepest->arc_from_tip_mm << " mm from the tip ("
+                           << region_name(deepest->region) << ")";
+            unphysical << ", more than " << kMaxPhysicalPenetration_mm
+                       << " mm: the contact solution is no longer physical (tighten "
+                          "solver.contact.tolerance_N, raise "
+                          "solver.contact.max_sweeps or reduce solver.time_step_s)";
+        }
+        if (!unphysical.str().empty()) {
+            sum.complete = false;
+            sum.message = unphysical.str();
+            sum.failure_time_s = world.time_s();
+            break;
+        }
+
+        if (callbacks.on_step) callbacks.on_step(world, report);
+        maybe_sample(&report);
+        if (callbacks.on_progress)
+            callbacks.on_progress({world.time_s(), end, loaded, world.handle_force_N()});
     }
-    ++sum.steps;
-    sweeps_total += report.sweeps;
-    sum.gs_sweeps_max = std::max(sum.gs_sweeps_max, report.sweeps);
-    sum.dropped_contacts_total += report.dropped_contacts;
-    if (report.material_tangent_fallback) ++sum.material_tangent_fallbacks;
-    sum.max_penetration_mm = std::max(sum.max_penetration_mm, report.max_penetration_mm);
-    sum.friction_work_Nmm += report.friction_work_Nmm;
-    sum.max_handle_force_N = std::max(sum.max_handle_force_N, std::abs(world.handle_force_N()));
-    sum.max_handle_torque_Nmm = std::max(sum.max_handle_torque_Nmm, std::abs(world.handle_torque_Nmm()));
-    std::size_t loaded = 0;
-    const WorldContact* strongest = nullptr;
-    const WorldContact* deepest = nullptr;
-    for (const WorldContact& c : world.contacts()) {
-      if (deepest == nullptr || c.gap_mm < deepest->gap_mm) deepest = &c;
-      if (!(c.normal_force_N > 0.0)) continue;
-      ++loaded;
-      sum.max_contact_force_N = std::max(sum.max_contact_force_N, c.normal_force_N);
-      double& region_max = sum.max_contact_force_by_region_N[region_index(c.region)];
-      region_max = std::max(region_max, c.normal_force_N);
-      if (strongest == nullptr || c.normal_force_N > strongest->normal_force_N) strongest = &c;
-    }
-    sum.max_simultaneous_contacts = std::max(sum.max_simultaneous_contacts, loaded);
 
-    // A step the solvers accepted may still be unphysical.
-    std::ostringstream unphysical;
-    if (strongest != nullptr && strongest->normal_force_N > kMaxPhysicalContactForce_N)
-      unphysical << "t = " << world.time_s() << " s: contact normal force " << strongest->normal_force_N << " N at "
-                 << strongest->arc_from_tip_mm << " mm from the tip (" << region_name(strongest->region)
-                 << ") exceeds " << kMaxPhysicalContactForce_N
-                 << " N: the run is no longer physical (check the procedure's forces and speeds, or reduce "
-                    "solver.time_step_s)";
-    else if (report.max_penetration_mm > kMaxPhysicalPenetration_mm) {
-      unphysical << "t = " << world.time_s() << " s: the scope penetrates the colon wall by " << report.max_penetration_mm
-                 << " mm";
-      if (deepest != nullptr)
-        unphysical << " at " << deepest->arc_from_tip_mm << " mm from the tip (" << region_name(deepest->region) << ")";
-      unphysical << ", more than " << kMaxPhysicalPenetration_mm
-                 << " mm: the contact solution is no longer physical (tighten solver.contact.tolerance_N, raise "
-                    "solver.contact.max_sweeps or reduce solver.time_step_s)";
-    }
-    if (!unphysical.str().empty()) {
-      sum.complete = false;
-      sum.message = unphysical.str();
-      sum.failure_time_s = world.time_s();
-      break;
-    }
-
-    if (callbacks.on_step) callbacks.on_step(world, report);
-    maybe_sample(&report);
-    if (callbacks.on_progress) callbacks.on_progress({world.time_s(), end, loaded, world.handle_force_N()});
-  }
-
-  sum.simulated_time_s = world.time_s();
-  sum.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-  sum.real_time_factor = sum.wall_time_s > 0.0 ? sum.simulated_time_s / sum.wall_time_s : 0.0;
-  sum.gs_sweeps_mean = sum.steps > 0 ? static_cast<double>(sweeps_total) / static_cast<double>(sum.steps) : 0.0;
-  sum.final_tip_mm = world.node_position_mm(world.scope_node_count() - 1);
-  sum.final_insertion_depth_mm = world.insertion_depth_mm();
-  sum.final_roll_deg = world.roll_rad() * kDegPerRad;
-  sum.warnings = hand.warnings();
-  return sum;
+    sum.simulated_time_s = world.time_s();
+    sum.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+    sum.real_time_factor = sum.wall_time_s > 0.0 ? sum.simulated_time_s / sum.wall_time_s : 0.0;
+    sum.gs_sweeps_mean =
+        sum.steps > 0 ? static_cast<double>(sweeps_total) / static_cast<double>(sum.steps) : 0.0;
+    sum.final_tip_mm = world.node_position_mm(world.scope_node_count() - 1);
+    sum.final_insertion_depth_mm = world.insertion_depth_mm();
+    sum.final_roll_deg = world.roll_rad() * kDegPerRad;
+    sum.warnings = hand.warnings();
+    return sum;
 }
 
 }  // namespace scopekin::model

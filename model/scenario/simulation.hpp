@@ -22,66 +22,67 @@ inline constexpr double kMaxPhysicalPenetration_mm = 1.0;
 
 /// One row of world.csv: the world's true state after a step (or the initial state).
 struct WorldRow {
-  double time_s = 0;
-  double handle_force_N = 0;
-  double handle_torque_Nmm = 0;
-  double insertion_depth_mm = 0;
-  double roll_deg = 0;
-  Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> nodes_mm;  ///< at Scenario::outputs.nodes_from_tip_mm (nearest node)
-  std::size_t contact_count = 0;          ///< contacts carrying load (normal force > 0)
-  double contact_force_total_N = 0;       ///< sum of normal forces
-  double contact_force_max_N = 0;
-  std::array<double, 8> max_contact_force_by_region_N{};  ///< kColonRegionsInOrder order
-  std::size_t sticking_contacts = 0;
-  std::size_t slipping_contacts = 0;
-  bool has_tip_driving_angle = false;
-  double tip_driving_angle_deg = 0;  ///< of the distal-most loaded contact
-  std::size_t gs_sweeps = 0;         ///< of the step that led here (0 at t = 0)
+    double time_s = 0;
+    double handle_force_N = 0;
+    double handle_torque_Nmm = 0;
+    double insertion_depth_mm = 0;
+    double roll_deg = 0;
+    Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3d>
+        nodes_mm;                      ///< at Scenario::outputs.nodes_from_tip_mm (nearest node)
+    std::size_t contact_count = 0;     ///< contacts carrying load (normal force > 0)
+    double contact_force_total_N = 0;  ///< sum of normal forces
+    double contact_force_max_N = 0;
+    std::array<double, 8> max_contact_force_by_region_N{};  ///< kColonRegionsInOrder order
+    std::size_t sticking_contacts = 0;
+    std::size_t slipping_contacts = 0;
+    bool has_tip_driving_angle = false;
+    double tip_driving_angle_deg = 0;  ///< of the distal-most loaded contact
+    std::size_t gs_sweeps = 0;         ///< of the step that led here (0 at t = 0)
 };
 
 struct SimulationProgress {
-  double time_s = 0;
-  double end_s = 0;
-  std::size_t contacts = 0;  ///< loaded contacts now
-  double handle_force_N = 0;
+    double time_s = 0;
+    double end_s = 0;
+    std::size_t contacts = 0;  ///< loaded contacts now
+    double handle_force_N = 0;
 };
 
 struct SimulationSummary {
-  bool complete = false;
-  std::string message;           ///< why the run failed (empty when complete)
-  double failure_time_s = 0;     ///< end time of the step that failed
-  std::size_t steps = 0;         ///< steps taken successfully
-  std::size_t samples = 0;
-  double end_time_s = 0;         ///< where the procedure ends
-  double simulated_time_s = 0;   ///< world time reached
-  double wall_time_s = 0;
-  double real_time_factor = 0;   ///< simulated / wall time
-  double max_handle_force_N = 0;      ///< largest |handle force|
-  double max_handle_torque_Nmm = 0;   ///< largest |handle torque|
-  double max_contact_force_N = 0;
-  std::array<double, 8> max_contact_force_by_region_N{};
-  std::size_t max_simultaneous_contacts = 0;  ///< loaded contacts
-  double gs_sweeps_mean = 0;
-  std::size_t gs_sweeps_max = 0;
-  std::size_t dropped_contacts_total = 0;
-  std::size_t material_tangent_fallbacks = 0;
-  double max_penetration_mm = 0;
-  double friction_work_Nmm = 0;  ///< sum over steps and contacts of f_T . slip (<= 0: dissipated)
-  Eigen::Vector3d final_tip_mm = Eigen::Vector3d::Zero();
-  double final_insertion_depth_mm = 0;
-  double final_roll_deg = 0;
-  std::vector<std::string> warnings;
+    bool complete = false;
+    std::string message;        ///< why the run failed (empty when complete)
+    double failure_time_s = 0;  ///< end time of the step that failed
+    std::size_t steps = 0;      ///< steps taken successfully
+    std::size_t samples = 0;
+    double end_time_s = 0;        ///< where the procedure ends
+    double simulated_time_s = 0;  ///< world time reached
+    double wall_time_s = 0;
+    double real_time_factor = 0;       ///< simulated / wall time
+    double max_handle_force_N = 0;     ///< largest |handle force|
+    double max_handle_torque_Nmm = 0;  ///< largest |handle torque|
+    double max_contact_force_N = 0;
+    std::array<double, 8> max_contact_force_by_region_N{};
+    std::size_t max_simultaneous_contacts = 0;  ///< loaded contacts
+    double gs_sweeps_mean = 0;
+    std::size_t gs_sweeps_max = 0;
+    std::size_t dropped_contacts_total = 0;
+    std::size_t material_tangent_fallbacks = 0;
+    double max_penetration_mm = 0;
+    double friction_work_Nmm = 0;  ///< sum over steps and contacts of f_T . slip (<= 0: dissipated)
+    Eigen::Vector3d final_tip_mm = Eigen::Vector3d::Zero();
+    double final_insertion_depth_mm = 0;
+    double final_roll_deg = 0;
+    std::vector<std::string> warnings;
 };
 
 struct SimulationCallbacks {
-  /// Called at t = 0 and at the first step at or after each sample time k / sample_rate_Hz.
-  std::function<void(const WorldRow&, const World&)> on_sample;
-  /// Called after every step.
-  std::function<void(const SimulationProgress&)> on_progress;
-  /// Called after every successful step with the world (before on_sample / on_progress); the
-  /// host simulator runs its sensors and the firmware here.
-  std::function<void(const World&, const WorldStepReport&)> on_step;
+    /// Called at t = 0 and at the first step at or after each sample time k / sample_rate_Hz.
+    std::function<void(const WorldRow&, const World&)> on_sample;
+    /// Called after every step.
+    std::function<void(const SimulationProgress&)> on_progress;
+    /// Called after every successful step with the world (before on_sample / on_progress); the
+    /// host simulator runs its sensors and the firmware here.
+    std::function<void(const World&, const WorldStepReport&)> on_step;
 };
 
 /// Builds the world of a world scenario. Throws ModelError (naming the scenario file) if the
@@ -91,16 +92,17 @@ std::unique_ptr<World> build_world(const Scenario& scenario);
 /// The world.csv row of the world's current state; `last_step` is the step that led there
 /// (nullptr at t = 0). `output_nodes`: scope node indices of the extra node columns.
 WorldRow sample_world(const World& world, const WorldStepReport* last_step,
-                              const std::vector<std::size_t>& output_nodes);
+                      const std::vector<std::size_t>& output_nodes);
 
 /// Scope node indices of Scenario::outputs.nodes_from_tip_mm.
 std::vector<std::size_t> output_nodes(const Scenario& scenario);
 
 /// The steps a run takes: from the world's step now to `last_step`.
 struct SimulationSpan {
-  std::size_t first_step = 0;  ///< the world's step now: 0 fresh from build_world, else a restored state's
-  std::size_t last_step = 0;
-  double end_s = 0;            ///< world time at last_step (SimulationSummary::end_time_s, progress)
+    std::size_t first_step =
+        0;  ///< the world's step now: 0 fresh from build_world, else a restored state's
+    std::size_t last_step = 0;
+    double end_s = 0;  ///< world time at last_step (SimulationSummary::end_time_s, progress)
 };
 
 /// The stepping loop: steps `world` through `span` with the commands of `hand`, until the end or
@@ -110,6 +112,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
 
 /// Plays the scenario's procedure on `world` (fresh from build_world) until its end or the first
 /// failed or unphysical step.
-SimulationSummary run_simulation(World& world, const Scenario& scenario, const SimulationCallbacks& callbacks);
+SimulationSummary run_simulation(World& world, const Scenario& scenario,
+                                 const SimulationCallbacks& callbacks);
 
 }  // namespace scopekin::model

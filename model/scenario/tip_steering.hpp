@@ -20,28 +20,30 @@
 namespace scopekin::model {
 
 struct SteeringWindow {
-  double start_s = 0;
-  double end_s = 0;
-  double lookahead_mm = 40.0;
-  double bending_section_mm = 80.0;  ///< CF-Q160L bending section (stated guess from its data sheet class: 7-10 cm)
-  double gain = 0.5;
+    double start_s = 0;
+    double end_s = 0;
+    double lookahead_mm = 40.0;
+    double bending_section_mm =
+        80.0;  ///< CF-Q160L bending section (stated guess from its data sheet class: 7-10 cm)
+    double gain = 0.5;
 };
 
 class TipSteering final : public WorldEffect {
- public:
-  /// `colon` in the body frame (the scenario's), `bending_stiffness_Nmm2` the scope's EI,
-  /// `element_mm` the scope's element length. Throws ModelError for a bad window.
-  TipSteering(std::vector<SteeringWindow> windows, const ColonTube& colon, double bending_stiffness_Nmm2,
-              double element_mm);
-  std::string name() const override { return "tip_steering"; }
-  void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
+public:
+    /// `colon` in the body frame (the scenario's), `bending_stiffness_Nmm2` the scope's EI,
+    /// `element_mm` the scope's element length. Throws ModelError for a bad window.
+    TipSteering(std::vector<SteeringWindow> windows, const ColonTube& colon,
+                double bending_stiffness_Nmm2, double element_mm);
+    std::string name() const override { return "tip_steering"; }
+    void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
 
- private:
-  std::vector<SteeringWindow> windows_;
-  ColonTube colon_;
-  double ei_Nmm2_;
-  double element_mm_;
-  mutable double tip_path_mm_ = -1;  // the tip's place along the colon at the last call (tracking)
+private:
+    std::vector<SteeringWindow> windows_;
+    ColonTube colon_;
+    double ei_Nmm2_;
+    double element_mm_;
+    mutable double tip_path_mm_ =
+        -1;  // the tip's place along the colon at the last call (tracking)
 };
 
 }  // namespace scopekin::model

@@ -19,43 +19,44 @@
 namespace scopekin::model {
 
 struct DynamicSettings {
-  double time_step_s = 0.005;      ///< allowed range [0.001, 0.033] s
-  RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
-  int max_iterations = 20;
-  double relative_tolerance = 1e-8;
-  void validate() const;           ///< throws ModelError naming the field
+    double time_step_s = 0.005;  ///< allowed range [0.001, 0.033] s
+    RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
+    int max_iterations = 20;
+    double relative_tolerance = 1e-8;
+    void validate() const;  ///< throws ModelError naming the field
 };
 
 struct DynamicStepReport {
-  bool converged = false;
-  int iterations = 0;
-  double residual_force_N = 0;
+    bool converged = false;
+    int iterations = 0;
+    double residual_force_N = 0;
 };
 
 class DynamicSolver {
- public:
-  DynamicSolver(const ScopeBeam& beam, DynamicSettings settings);
-  /// Advances the beam by one time step. `loads` are evaluated at the end of the step;
-  /// supports with targets are driven to those targets at the end of the step. Newton starts
-  /// from a constant-velocity predictor with one factorisation per step (modified Newton) and
-  /// falls back to plain Newton from q_n if that fails; a step that still fails to converge
-  /// is undone (state and time unchanged) and reported with converged = false.
-  DynamicStepReport step(ScopeBeam& beam, const BeamLoads& loads, const std::vector<NodeSupport>& supports);
-  /// Node velocities: 6 per node [mm/s, rad/s].
-  const Eigen::VectorXd& velocity() const { return velocity_; }
-  double time_s() const { return time_s_; }
-  const DynamicSettings& settings() const { return settings_; }
+public:
+    DynamicSolver(const ScopeBeam& beam, DynamicSettings settings);
+    /// Advances the beam by one time step. `loads` are evaluated at the end of the step;
+    /// supports with targets are driven to those targets at the end of the step. Newton starts
+    /// from a constant-velocity predictor with one factorisation per step (modified Newton) and
+    /// falls back to plain Newton from q_n if that fails; a step that still fails to converge
+    /// is undone (state and time unchanged) and reported with converged = false.
+    DynamicStepReport step(ScopeBeam& beam, const BeamLoads& loads,
+                           const std::vector<NodeSupport>& supports);
+    /// Node velocities: 6 per node [mm/s, rad/s].
+    const Eigen::VectorXd& velocity() const { return velocity_; }
+    double time_s() const { return time_s_; }
+    const DynamicSettings& settings() const { return settings_; }
 
- private:
-  DynamicStepReport attempt(ScopeBeam& beam, const BeamLoads& loads, const std::vector<NodeSupport>& supports,
-                            bool fast);
+private:
+    DynamicStepReport attempt(ScopeBeam& beam, const BeamLoads& loads,
+                              const std::vector<NodeSupport>& supports, bool fast);
 
-  DynamicSettings settings_;
-  Eigen::VectorXd velocity_;
-  Eigen::VectorXd step_increment_;
-  double time_s_ = 0;
-  ScopeBeam::Assembly assembly_;
-  BlockTridiagonalMatrix mass_, damping_, system_;
+    DynamicSettings settings_;
+    Eigen::VectorXd velocity_;
+    Eigen::VectorXd step_increment_;
+    double time_s_ = 0;
+    ScopeBeam::Assembly assembly_;
+    BlockTridiagonalMatrix mass_, damping_, system_;
 };
 
 }  // namespace scopekin::model

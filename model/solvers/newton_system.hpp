@@ -10,8 +10,8 @@ namespace scopekin::model {
 
 /// Residual norms on the free DOFs: forces [N] and moments [N mm] measured separately.
 struct ResidualNorm {
-  double force_N = 0;
-  double moment_Nmm = 0;
+    double force_N = 0;
+    double moment_Nmm = 0;
 };
 ResidualNorm free_residual_norm(const Eigen::VectorXd& residual, const SupportMotion& motion);
 

@@ -9,19 +9,21 @@
 namespace scopekin::model {
 
 struct RayleighDamping {
-  double mass_coefficient_per_s = 0;  ///< a' [1/s]
-  double stiffness_coefficient_s = 0; ///< b' [s]
+    double mass_coefficient_per_s = 0;   ///< a' [1/s]
+    double stiffness_coefficient_s = 0;  ///< b' [s]
 
-  /// From coefficients fitted with frequencies in Hz (the thesis's convention).
-  static RayleighDamping from_hz_convention(double alpha_hz_convention, double beta_hz_convention);
-  /// The thesis's Eq. (4.15): alpha = 0.3864, beta = 0.0164 (Hz convention).
-  static RayleighDamping thesis_cf_q160l();
-  /// Modal damping ratio of a mode with natural frequency f [Hz]: zeta = a'/(2w) + b' w/2.
-  double damping_ratio(double frequency_hz) const;
+    /// From coefficients fitted with frequencies in Hz (the thesis's convention).
+    static RayleighDamping from_hz_convention(double alpha_hz_convention,
+                                              double beta_hz_convention);
+    /// The thesis's Eq. (4.15): alpha = 0.3864, beta = 0.0164 (Hz convention).
+    static RayleighDamping thesis_cf_q160l();
+    /// Modal damping ratio of a mode with natural frequency f [Hz]: zeta = a'/(2w) + b' w/2.
+    double damping_ratio(double frequency_hz) const;
 };
 
 /// Checks an implicit time step (in [0.001, 0.033] s) and damping coefficients (>= 0); errors
 /// name the fields under `prefix` ("dynamic", "solver").
-void validate_time_step_and_damping(double time_step_s, const RayleighDamping& damping, const std::string& prefix);
+void validate_time_step_and_damping(double time_step_s, const RayleighDamping& damping,
+                                    const std::string& prefix);
 
 }  // namespace scopekin::model

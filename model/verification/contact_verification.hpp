@@ -15,21 +15,21 @@ std::vector<VerificationRow> lcp_rows();
 
 /// What a scope pushed through a tube did.
 struct PushResult {
-  bool ok = false;
-  std::string failure;
-  std::size_t steps = 0;
-  double max_normal_force_N = 0;
-  double max_lateral_tip_deviation_mm = 0;   ///< tip distance from the entry axis (straight tube)
-  std::size_t loaded_contacts_in_bend = 0;
-  std::size_t loaded_contacts_on_outer_wall = 0;
-  double max_penetration_mm = 0;             ///< linearised, after correction
-  double max_friction_work_Nmm = 0;          ///< per step; <= 0 when friction only dissipates
-  double handle_advance_mm = 0;              ///< over the final window
-  double tip_advance_mm = 0;                 ///< along the colon at rest, over the final window
-  double tip_sliding_mm = 0;                 ///< tip contact's slip relative to the wall, final window
-  double tip_driving_angle_rad = 0;          ///< at the end, at the tip contact
-  bool tip_sticking = false;                 ///< tip contact in stick at the end
-  double handle_force_N = 0;                 ///< at the end
+    bool ok = false;
+    std::string failure;
+    std::size_t steps = 0;
+    double max_normal_force_N = 0;
+    double max_lateral_tip_deviation_mm = 0;  ///< tip distance from the entry axis (straight tube)
+    std::size_t loaded_contacts_in_bend = 0;
+    std::size_t loaded_contacts_on_outer_wall = 0;
+    double max_penetration_mm = 0;     ///< linearised, after correction
+    double max_friction_work_Nmm = 0;  ///< per step; <= 0 when friction only dissipates
+    double handle_advance_mm = 0;      ///< over the final window
+    double tip_advance_mm = 0;         ///< along the colon at rest, over the final window
+    double tip_sliding_mm = 0;         ///< tip contact's slip relative to the wall, final window
+    double tip_driving_angle_rad = 0;  ///< at the end, at the tip contact
+    bool tip_sticking = false;         ///< tip contact in stick at the end
+    double handle_force_N = 0;         ///< at the end
 };
 
 /// Pushes a 600 mm CF-Q160L (60 elements) at 50 mm/s for `duration_s` into a rigid straight

@@ -30,31 +30,31 @@ inline constexpr std::array<std::array<double, 2>, 10> kMeasuredDisplacement_mm{
                                                                                  {-352, -414}}};
 
 struct Result {
-  double rms_mm = 0;                            ///< RMS distance, points 2..10
-  std::vector<Eigen::Vector2d> computed_mm;     ///< displacement of points 1..10
-  int newton_iterations = 0;
-  bool converged = false;
+    double rms_mm = 0;                         ///< RMS distance, points 2..10
+    std::vector<Eigen::Vector2d> computed_mm;  ///< displacement of points 1..10
+    int newton_iterations = 0;
+    bool converged = false;
 };
 
 /// Static large-deflection solve of the 800 mm cantilever under self weight with the given EI
 /// [N mm^2] and weight per length [N/mm], `elements` equal elements (a multiple of 16), the
 /// clamp pitched by `clamp_pitch_deg` (positive = tip raised) from the horizontal.
-Result simulate(double bending_stiffness_Nmm2, double weight_per_length_N_per_mm, double clamp_pitch_deg = 0.0,
-                int elements = 80);
+Result simulate(double bending_stiffness_Nmm2, double weight_per_length_N_per_mm,
+                double clamp_pitch_deg = 0.0, int elements = 80);
 
 /// The same with EI varying linearly along the 800 mm, from `ei_clamp` at the clamp to `ei_tip`
 /// at the free (distal) end [N mm^2], taken at each element's midpoint.
-Result simulate_profile(double ei_clamp, double ei_tip, double weight_per_length_N_per_mm, double clamp_pitch_deg = 0.0,
-                        int elements = 80);
+Result simulate_profile(double ei_clamp, double ei_tip, double weight_per_length_N_per_mm,
+                        double clamp_pitch_deg = 0.0, int elements = 80);
 
 /// Fitted parameters. Under self weight the shape depends on EI / w only (w = weight per
 /// length), so EI and w cannot be identified separately; EI is reported at App. B's weight.
 /// The clamp's pitch was not recorded by the thesis; a photograph (Fig. 4.13) shows a hand clamp.
 struct Fit {
-  double ei_over_weight_mm3 = 0;
-  double clamp_pitch_deg = 0;
-  double rms_mm = 0;
-  int evaluations = 0;
+    double ei_over_weight_mm3 = 0;
+    double clamp_pitch_deg = 0;
+    double rms_mm = 0;
+    int evaluations = 0;
 };
 /// One parameter: EI / w, clamp horizontal (golden-section search on log(EI / w)).
 Fit fit_ei_over_weight(int elements = 80);

@@ -48,215 +48,233 @@ inline constexpr std::size_t kMaxWorldContacts = 256;
 
 /// Friction coefficient on a stretch of the scope, measured from the tip [mm].
 struct FrictionZone {
-  double from_tip_mm = 0;
-  double to_tip_mm = 0;
-  double coefficient = 0.25;
+    double from_tip_mm = 0;
+    double to_tip_mm = 0;
+    double coefficient = 0.25;
 };
 
 struct WorldContactSettings {
-  double activation_distance_mm = 2.0;  ///< nodes closer to the wall enter the LCP
-  double friction_coefficient = 0.25;   ///< thesis 5.3 value; default for the whole scope
-  std::vector<FrictionZone> friction_zones;  ///< overrides along the scope (later zones win)
-  /// Local compliance of the colon wall at a contact [mm/N], isotropic, added to W_aa: the wall's
-  /// own indentation, which the beam colon (no radial deformation, thesis 4.3) leaves out. Order
-  /// of magnitude of a soft layer pressed over one node's length l: 1 / (E l) with the sigmoid's
-  /// E = 0.36 N/mm^2 (Table 4.6) and l = 10 mm gives 0.28 mm/N. It also keeps W_aa well
-  /// conditioned where the colon is clamped (rigid), which Gauss-Seidel needs to converge fast.
-  double wall_compliance_mm_per_N = 0.28;
-  double tolerance_N = 1e-6;            ///< Gauss-Seidel: largest force change per sweep
-  std::size_t max_sweeps = 2000;
-  /// Gauss-Seidel over-relaxation omega in (0, 2); 1 = plain Gauss-Seidel.
-  double relaxation = 1.0;
-  void validate() const;  ///< throws ModelError naming the field
+    double activation_distance_mm = 2.0;       ///< nodes closer to the wall enter the LCP
+    double friction_coefficient = 0.25;        ///< thesis 5.3 value; default for the whole scope
+    std::vector<FrictionZone> friction_zones;  ///< overrides along the scope (later zones win)
+    /// Local compliance of the colon wall at a contact [mm/N], isotropic, added to W_aa: the wall's
+    /// own indentation, which the beam colon (no radial deformation, thesis 4.3) leaves out. Order
+    /// of magnitude of a soft layer pressed over one node's length l: 1 / (E l) with the sigmoid's
+    /// E = 0.36 N/mm^2 (Table 4.6) and l = 10 mm gives 0.28 mm/N. It also keeps W_aa well
+    /// conditioned where the colon is clamped (rigid), which Gauss-Seidel needs to converge fast.
+    double wall_compliance_mm_per_N = 0.28;
+    double tolerance_N = 1e-6;  ///< Gauss-Seidel: largest force change per sweep
+    std::size_t max_sweeps = 2000;
+    /// Gauss-Seidel over-relaxation omega in (0, 2); 1 = plain Gauss-Seidel.
+    double relaxation = 1.0;
+    void validate() const;  ///< throws ModelError naming the field
 };
 
 struct ScopeSpec {
-  double length_mm = 1700.0;
-  std::size_t elements = 170;
-  double radius_mm = 6.65;
-  BeamSection section;  ///< all elements (effects may change them)
+    double length_mm = 1700.0;
+    std::size_t elements = 170;
+    double radius_mm = 6.65;
+    BeamSection section;  ///< all elements (effects may change them)
 };
 
 struct WorldSettings {
-  double time_step_s = 0.01;  ///< [0.001, 0.033] s
-  RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
-  int newton_iterations = 1;  ///< of the free motion; 1 = linearly implicit Euler
-  Eigen::Vector3d gravity_mm_per_s2{0.0, 0.0, -9810.0};  ///< body frame (default colon: patient supine)
-  double initial_insertion_mm = 0.0;  ///< scope past the anus at t = 0, straight on the entry axis
-  WorldContactSettings contact;
-  void validate() const;
+    double time_step_s = 0.01;  ///< [0.001, 0.033] s
+    RayleighDamping damping = RayleighDamping::thesis_cf_q160l();
+    int newton_iterations = 1;  ///< of the free motion; 1 = linearly implicit Euler
+    Eigen::Vector3d gravity_mm_per_s2{0.0, 0.0,
+                                      -9810.0};  ///< body frame (default colon: patient supine)
+    double initial_insertion_mm =
+        0.0;  ///< scope past the anus at t = 0, straight on the entry axis
+    WorldContactSettings contact;
+    void validate() const;
 };
 
 /// What the hand does over the coming step (values at the end of the step).
 struct HandleCommand {
-  bool force_controlled = false;  ///< axial: push force applied instead of depth prescribed
-  double insertion_mm = 0;        ///< prescribed depth (position control)
-  double push_force_N = 0;        ///< applied force along the entry axis, + = in (force control)
-  bool torque_controlled = false;
-  double roll_rad = 0;            ///< prescribed roll about the entry axis
-  double torque_Nmm = 0;          ///< applied torque about the entry axis (torque control)
+    bool force_controlled = false;  ///< axial: push force applied instead of depth prescribed
+    double insertion_mm = 0;        ///< prescribed depth (position control)
+    double push_force_N = 0;        ///< applied force along the entry axis, + = in (force control)
+    bool torque_controlled = false;
+    double roll_rad = 0;    ///< prescribed roll about the entry axis
+    double torque_Nmm = 0;  ///< applied torque about the entry axis (torque control)
 };
 
 /// A scope node seen from the colon, and the quasi-static compliance between such nodes
 /// (World::probe_stations): what the firmware's reduced model is built from (model/reduction).
 struct StationProbe {
-  std::size_t scope_node = 0;
-  double path_mm = 0;            ///< arc length along the colon centerline of the closest point
-  std::size_t colon_segment = 0;
-  double colon_weight = 0;
-  double gap_mm = 0;             ///< lumen radius - scope radius - distance from the centerline
-  ColonRegion region = ColonRegion::rectum;
-  Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< columns n (wall -> scope), t (along the colon), s; body frame
-  bool inside = false;           ///< past the anus
+    std::size_t scope_node = 0;
+    double path_mm = 0;  ///< arc length along the colon centerline of the closest point
+    std::size_t colon_segment = 0;
+    double colon_weight = 0;
+    double gap_mm = 0;  ///< lumen radius - scope radius - distance from the centerline
+    ColonRegion region = ColonRegion::rectum;
+    Eigen::Matrix3d frame = Eigen::Matrix3d::
+        Identity();       ///< columns n (wall -> scope), t (along the colon), s; body frame
+    bool inside = false;  ///< past the anus
 };
 struct StationCompliance {
-  std::vector<StationProbe> stations;
-  /// 3k x 3k, blocks (a, b) in the frames of a (rows) and b (columns) [mm/N]: the quasi-static
-  /// tangent compliance of the scope (handle held) + the colon's compliance at the closest
-  /// centerline points + the wall compliance on the diagonal blocks. Rows/columns of stations
-  /// outside the body are zero except 1 on the diagonal.
-  Eigen::MatrixXd compliance_mm_per_N;
+    std::vector<StationProbe> stations;
+    /// 3k x 3k, blocks (a, b) in the frames of a (rows) and b (columns) [mm/N]: the quasi-static
+    /// tangent compliance of the scope (handle held) + the colon's compliance at the closest
+    /// centerline points + the wall compliance on the diagonal blocks. Rows/columns of stations
+    /// outside the body are zero except 1 on the diagonal.
+    Eigen::MatrixXd compliance_mm_per_N;
 };
 
 /// One contact after a step, in the body frame.
 struct WorldContact {
-  std::size_t scope_node = 0;
-  double arc_from_tip_mm = 0;
-  ColonRegion region = ColonRegion::rectum;
-  Eigen::Vector3d scope_point_mm = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< wall -> scope
-  double normal_force_N = 0;
-  double tangential_force_N = 0;
-  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< the wall's force on the scope (normal + friction)
-  double friction_coefficient = 0;
-  /// Driving-force angle alpha = atan(|f_T| / f_n) (thesis 2.2.1); stick needs alpha < atan(mu).
-  double driving_angle_rad = 0;
-  double gap_mm = 0;  ///< after the correction (linearised); < 0 = penetration
-  Eigen::Vector3d slip_mm = Eigen::Vector3d::Zero();  ///< relative tangential motion over the step
-  contact::ContactState state = contact::ContactState::separated;
+    std::size_t scope_node = 0;
+    double arc_from_tip_mm = 0;
+    ColonRegion region = ColonRegion::rectum;
+    Eigen::Vector3d scope_point_mm = Eigen::Vector3d::Zero();
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< wall -> scope
+    double normal_force_N = 0;
+    double tangential_force_N = 0;
+    Eigen::Vector3d force_N =
+        Eigen::Vector3d::Zero();  ///< the wall's force on the scope (normal + friction)
+    double friction_coefficient = 0;
+    /// Driving-force angle alpha = atan(|f_T| / f_n) (thesis 2.2.1); stick needs alpha < atan(mu).
+    double driving_angle_rad = 0;
+    double gap_mm = 0;  ///< after the correction (linearised); < 0 = penetration
+    Eigen::Vector3d slip_mm =
+        Eigen::Vector3d::Zero();  ///< relative tangential motion over the step
+    contact::ContactState state = contact::ContactState::separated;
 };
 
 struct WorldStepReport {
-  bool ok = false;
-  std::string failure;  ///< why the step failed (the world is left as before the step)
-  std::size_t contacts = 0;
-  std::size_t dropped_contacts = 0;  ///< candidates beyond kMaxWorldContacts (closest kept)
-  std::size_t sweeps = 0;
-  double contact_residual_N = 0;   ///< max of the solver's complementarity, cone, friction residuals
-  double max_penetration_mm = 0;   ///< linearised, after the correction
-  double friction_work_Nmm = 0;    ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
-  bool material_tangent_fallback = false;  ///< the full tangent failed; the step used the material one
+    bool ok = false;
+    std::string failure;  ///< why the step failed (the world is left as before the step)
+    std::size_t contacts = 0;
+    std::size_t dropped_contacts = 0;  ///< candidates beyond kMaxWorldContacts (closest kept)
+    std::size_t sweeps = 0;
+    double contact_residual_N =
+        0;  ///< max of the solver's complementarity, cone, friction residuals
+    double max_penetration_mm = 0;  ///< linearised, after the correction
+    double friction_work_Nmm =
+        0;  ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
+    bool material_tangent_fallback =
+        false;  ///< the full tangent failed; the step used the material one
 };
 
 class World {
- public:
-  /// Builds the colon (structure, compliance) and the straight scope on the entry axis, tip at
-  /// `settings.initial_insertion_mm` past the anus. Throws ModelError naming the problem for bad
-  /// settings, a colon that is not held, or an initial insertion that crosses the wall.
-  World(const ScopeSpec& scope, const ColonTube& colon, const std::array<ColonRegionProperties, 8>& properties,
-        WorldSettings settings, std::vector<std::shared_ptr<const WorldEffect>> effects = {});
+public:
+    /// Builds the colon (structure, compliance) and the straight scope on the entry axis, tip at
+    /// `settings.initial_insertion_mm` past the anus. Throws ModelError naming the problem for bad
+    /// settings, a colon that is not held, or an initial insertion that crosses the wall.
+    World(const ScopeSpec& scope, const ColonTube& colon,
+          const std::array<ColonRegionProperties, 8>& properties, WorldSettings settings,
+          std::vector<std::shared_ptr<const WorldEffect>> effects = {});
 
-  /// Advances by one time step. A failed step (singular system, non-finite state, contact solver
-  /// not converged) leaves the world unchanged and says why.
-  WorldStepReport step(const HandleCommand& command);
+    /// Advances by one time step. A failed step (singular system, non-finite state, contact solver
+    /// not converged) leaves the world unchanged and says why.
+    WorldStepReport step(const HandleCommand& command);
 
-  double time_s() const { return time_s_; }
-  double time_step_s() const { return settings_.time_step_s; }
-  double insertion_depth_mm() const;
-  double roll_rad() const { return roll_rad_; }
-  double handle_force_N() const { return handle_force_N_; }
-  double handle_torque_Nmm() const { return handle_torque_Nmm_; }
-  double scope_length_mm() const { return length_mm_; }
-  std::size_t scope_node_count() const { return scope_.node_count(); }
-  double arc_from_tip_mm(std::size_t node) const { return length_mm_ - scope_.arc_length_mm(node); }
-  /// Scope node position in the body frame [mm]; node 0 = handle, last = tip.
-  Eigen::Vector3d node_position_mm(std::size_t node) const;
-  /// Node velocity in the body frame [mm/s].
-  Eigen::Vector3d node_velocity_mm_per_s(std::size_t node) const;
-  /// Scope axis direction at a node (body frame).
-  Eigen::Vector3d node_axis(std::size_t node) const;
-  const std::vector<WorldContact>& contacts() const { return contact_reports_; }
-  /// Colon centerline node positions now (at rest + displacement under the contact forces), body frame.
-  std::vector<Eigen::Vector3d> colon_positions_mm() const;
-  /// One of them (cheaper than all).
-  Eigen::Vector3d colon_position_mm(std::size_t node) const;
-  const ColonTube& colon() const { return body_tube_; }
-  /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
-  const ScopeBeam& scope_computation_frame() const { return scope_; }
-  /// The given scope nodes (strictly increasing) against the colon in its current shape: where
-  /// they are along the centerline and the quasi-static compliance between them (K_T^-1 of the
-  /// scope with the handle held, material tangent where the full one is indefinite). Each node's
-  /// closest centerline point is searched along the colon within [depth - arc_from_tip -
-  /// search_back_mm, depth - arc_from_tip + 5 mm]: a shaft cannot be further along the colon than
-  /// its length allows, and the window keeps a node off other turns of a loop.
-  StationCompliance probe_stations(const std::vector<std::size_t>& nodes, double search_back_mm = 400.0);
-  /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.
-  double scope_energy_Nmm() const;
+    double time_s() const { return time_s_; }
+    double time_step_s() const { return settings_.time_step_s; }
+    double insertion_depth_mm() const;
+    double roll_rad() const { return roll_rad_; }
+    double handle_force_N() const { return handle_force_N_; }
+    double handle_torque_Nmm() const { return handle_torque_Nmm_; }
+    double scope_length_mm() const { return length_mm_; }
+    std::size_t scope_node_count() const { return scope_.node_count(); }
+    double arc_from_tip_mm(std::size_t node) const {
+        return length_mm_ - scope_.arc_length_mm(node);
+    }
+    /// Scope node position in the body frame [mm]; node 0 = handle, last = tip.
+    Eigen::Vector3d node_position_mm(std::size_t node) const;
+    /// Node velocity in the body frame [mm/s].
+    Eigen::Vector3d node_velocity_mm_per_s(std::size_t node) const;
+    /// Scope axis direction at a node (body frame).
+    Eigen::Vector3d node_axis(std::size_t node) const;
+    const std::vector<WorldContact>& contacts() const { return contact_reports_; }
+    /// Colon centerline node positions now (at rest + displacement under the contact forces), body frame.
+    std::vector<Eigen::Vector3d> colon_positions_mm() const;
+    /// One of them (cheaper than all).
+    Eigen::Vector3d colon_position_mm(std::size_t node) const;
+    const ColonTube& colon() const { return body_tube_; }
+    /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
+    const ScopeBeam& scope_computation_frame() const { return scope_; }
+    /// The given scope nodes (strictly increasing) against the colon in its current shape: where
+    /// they are along the centerline and the quasi-static compliance between them (K_T^-1 of the
+    /// scope with the handle held, material tangent where the full one is indefinite). Each node's
+    /// closest centerline point is searched along the colon within [depth - arc_from_tip -
+    /// search_back_mm, depth - arc_from_tip + 5 mm]: a shaft cannot be further along the colon than
+    /// its length allows, and the window keeps a node off other turns of a loop.
+    StationCompliance probe_stations(const std::vector<std::size_t>& nodes,
+                                     double search_back_mm = 400.0);
+    /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.
+    double scope_energy_Nmm() const;
 
-  /// Everything that changes from step to step (the scope's configuration and velocity, the
-  /// contacts, the colon's loads, time, roll, the handle's reactions), without the parameters:
-  /// a world built from the same scope and colon, with other effects, continues from it. The
-  /// discrepancy workflow restarts candidate models from a baseline's states this way.
-  struct State {
-    double time_s = 0;
-    std::size_t steps_taken = 0;
-    double roll_rad = 0;
-    double handle_force_N = 0;
-    double handle_torque_Nmm = 0;
-    ScopeBeam::Configuration scope;
-    Eigen::VectorXd velocity;
-    std::vector<ColonPointForce> colon_forces, previous_colon_forces;
-    std::vector<WorldContact> contacts;
-    std::vector<std::array<double, 3>> warm_start;
-    CenterlineTracking tracking;
-  };
-  State state() const;
-  /// Continues from `saved`. Throws ModelError when it is another scope's or colon's (node counts
-  /// differ) or the step size differs (time is counted in steps).
-  void restore(const State& saved);
+    /// Everything that changes from step to step (the scope's configuration and velocity, the
+    /// contacts, the colon's loads, time, roll, the handle's reactions), without the parameters:
+    /// a world built from the same scope and colon, with other effects, continues from it. The
+    /// discrepancy workflow restarts candidate models from a baseline's states this way.
+    struct State {
+        double time_s = 0;
+        std::size_t steps_taken = 0;
+        double roll_rad = 0;
+        double handle_force_N = 0;
+        double handle_torque_Nmm = 0;
+        ScopeBeam::Configuration scope;
+        Eigen::VectorXd velocity;
+        std::vector<ColonPointForce> colon_forces, previous_colon_forces;
+        std::vector<WorldContact> contacts;
+        std::vector<std::array<double, 3>> warm_start;
+        CenterlineTracking tracking;
+    };
+    State state() const;
+    /// Continues from `saved`. Throws ModelError when it is another scope's or colon's (node counts
+    /// differ) or the step size differs (time is counted in steps).
+    void restore(const State& saved);
 
- private:
-  using Problem = contact::ContactProblem<double, kMaxWorldContacts>;
-  using Forces = contact::ContactForces<double, kMaxWorldContacts>;
+private:
+    using Problem = contact::ContactProblem<double, kMaxWorldContacts>;
+    using Forces = contact::ContactForces<double, kMaxWorldContacts>;
 
-  Eigen::Vector3d to_body(const Eigen::Vector3d& x) const { return anus_ + rotation_.transpose() * x; }
-  Eigen::Vector3d to_body_direction(const Eigen::Vector3d& v) const { return rotation_.transpose() * v; }
-  /// Friction coefficient at a contact: scenario value, zones, then the effects' hooks.
-  double friction_at(double arc_from_tip_mm, ColonRegion region, double sliding_speed_mm_per_s) const;
-  WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent);
+    Eigen::Vector3d to_body(const Eigen::Vector3d& x) const {
+        return anus_ + rotation_.transpose() * x;
+    }
+    Eigen::Vector3d to_body_direction(const Eigen::Vector3d& v) const {
+        return rotation_.transpose() * v;
+    }
+    /// Friction coefficient at a contact: scenario value, zones, then the effects' hooks.
+    double friction_at(double arc_from_tip_mm, ColonRegion region,
+                       double sliding_speed_mm_per_s) const;
+    WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent);
 
-  WorldSettings settings_;
-  std::vector<std::shared_ptr<const WorldEffect>> effects_;
-  Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();  // body -> computation
-  Eigen::Vector3d anus_ = Eigen::Vector3d::Zero();          // body frame
-  ColonTube body_tube_;
-  ColonTube tube_;  // computation frame
-  std::vector<Eigen::Vector3d> colon_rest_mm_;
-  std::unique_ptr<ColonCompliance> compliance_;
-  ScopeBeam scope_;
-  double length_mm_ = 0;
-  double scope_radius_mm_ = 0;
-  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // computation frame
+    WorldSettings settings_;
+    std::vector<std::shared_ptr<const WorldEffect>> effects_;
+    Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();  // body -> computation
+    Eigen::Vector3d anus_ = Eigen::Vector3d::Zero();          // body frame
+    ColonTube body_tube_;
+    ColonTube tube_;  // computation frame
+    std::vector<Eigen::Vector3d> colon_rest_mm_;
+    std::unique_ptr<ColonCompliance> compliance_;
+    ScopeBeam scope_;
+    double length_mm_ = 0;
+    double scope_radius_mm_ = 0;
+    Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // computation frame
 
-  double time_s_ = 0;
-  std::size_t steps_taken_ = 0;
-  double roll_rad_ = 0;
-  double handle_force_N_ = 0;
-  double handle_torque_Nmm_ = 0;
-  Eigen::VectorXd velocity_;
-  std::vector<ColonPointForce> colon_forces_;  // on the colon, computation frame
-  std::vector<ColonPointForce> previous_colon_forces_;  // one step earlier: the wall's velocity for effects
-  std::vector<WorldContact> contact_reports_;
-  std::vector<std::array<double, 3>> warm_start_;  // last contact force (n, t, s) per scope node
-  CenterlineTracking tracking_;
+    double time_s_ = 0;
+    std::size_t steps_taken_ = 0;
+    double roll_rad_ = 0;
+    double handle_force_N_ = 0;
+    double handle_torque_Nmm_ = 0;
+    Eigen::VectorXd velocity_;
+    std::vector<ColonPointForce> colon_forces_;  // on the colon, computation frame
+    std::vector<ColonPointForce>
+        previous_colon_forces_;  // one step earlier: the wall's velocity for effects
+    std::vector<WorldContact> contact_reports_;
+    std::vector<std::array<double, 3>> warm_start_;  // last contact force (n, t, s) per scope node
+    CenterlineTracking tracking_;
 
-  // Work storage reused every step.
-  ScopeBeam::Assembly assembly_;
-  BlockTridiagonalMatrix mass_, damping_, system_, unconstrained_;
-  BlockTridiagonalSolver factorization_;
-  SelectedInverse selected_inverse_;
-  std::unique_ptr<Problem> problem_;
-  std::unique_ptr<Forces> forces_;
+    // Work storage reused every step.
+    ScopeBeam::Assembly assembly_;
+    BlockTridiagonalMatrix mass_, damping_, system_, unconstrained_;
+    BlockTridiagonalSolver factorization_;
+    SelectedInverse selected_inverse_;
+    std::unique_ptr<Problem> problem_;
+    std::unique_ptr<Forces> forces_;
 };
 
 }  // namespace scopekin::model

@@ -46,8 +46,12 @@ struct HeapCounters {
 
 HeapCounters g_heap{};
 
-void count_allocation() noexcept { g_heap.allocations = g_heap.allocations + 1U; }
-void count_deallocation() noexcept { g_heap.deallocations = g_heap.deallocations + 1U; }
+void count_allocation() noexcept {
+    g_heap.allocations = g_heap.allocations + 1U;
+}
+void count_deallocation() noexcept {
+    g_heap.deallocations = g_heap.deallocations + 1U;
+}
 
 void* new_memory(std::size_t size) {
     count_allocation();
@@ -108,8 +112,12 @@ void* __wrap_memalign(std::size_t alignment, std::size_t size) {
 }
 
 // --- replaced global allocation functions ([new.delete]) ----------------------------------------
-void* operator new(std::size_t size) { return new_memory(size); }
-void* operator new[](std::size_t size) { return new_memory(size); }
+void* operator new(std::size_t size) {
+    return new_memory(size);
+}
+void* operator new[](std::size_t size) {
+    return new_memory(size);
+}
 void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
     try {
         return new_memory(size);
@@ -144,17 +152,39 @@ void* operator new[](std::size_t size, std::align_val_t alignment, const std::no
         return nullptr;
     }
 }
-void operator delete(void* p) noexcept { delete_memory(p); }
-void operator delete[](void* p) noexcept { delete_memory(p); }
-void operator delete(void* p, std::size_t) noexcept { delete_memory(p); }
-void operator delete[](void* p, std::size_t) noexcept { delete_memory(p); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { delete_memory(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { delete_memory(p); }
-void operator delete(void* p, std::align_val_t) noexcept { delete_memory(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { delete_memory(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { delete_memory(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { delete_memory(p); }
-void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { delete_memory(p); }
+void operator delete(void* p) noexcept {
+    delete_memory(p);
+}
+void operator delete[](void* p) noexcept {
+    delete_memory(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+    delete_memory(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+    delete_memory(p);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept {
+    delete_memory(p);
+}
+void operator delete[](void* p, const std::nothrow_t&) noexcept {
+    delete_memory(p);
+}
+void operator delete(void* p, std::align_val_t) noexcept {
+    delete_memory(p);
+}
+void operator delete[](void* p, std::align_val_t) noexcept {
+    delete_memory(p);
+}
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept {
+    delete_memory(p);
+}
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept {
+    delete_memory(p);
+}
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept {
+    delete_memory(p);
+}
 void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
     delete_memory(p);
 }
@@ -257,7 +287,8 @@ int main(int argc, char** argv) {
         scopekin::kinetics::init(scopekin::kinetics::default_config(), g_state);
         const HeapCounters after_init = g_heap;
         for (std::size_t i = 0; i < scenario->step_count; ++i) {
-            const scopekin::kinetics::Inputs inputs = scopekin::budget::to_inputs(scenario->steps[i]);
+            const scopekin::kinetics::Inputs inputs =
+                scopekin::budget::to_inputs(scenario->steps[i]);
             scopekin::kinetics::step(inputs, g_state, g_outputs);
         }
         const HeapCounters after_steps = g_heap;
@@ -285,19 +316,20 @@ int main(int argc, char** argv) {
                        << ", \"heap_deallocations_after_init\": " << r.deallocations << "}";
     }
     const bool pass = total_allocations == 0U && total_deallocations == 0U;
-    std::cout << "heap_allocations_after_init = " << total_allocations
-              << " (deallocations " << total_deallocations << "): "
-              << (pass ? "PASS" : "FAIL (bound: 0)") << "\n";
+    std::cout << "heap_allocations_after_init = " << total_allocations << " (deallocations "
+              << total_deallocations << "): " << (pass ? "PASS" : "FAIL (bound: 0)") << "\n";
 
     if (!json_path.empty()) {
         std::error_code ignored;
-        std::filesystem::create_directories(std::filesystem::path(json_path).parent_path(), ignored);
+        std::filesystem::create_directories(std::filesystem::path(json_path).parent_path(),
+                                            ignored);
         std::ofstream json(json_path, std::ios::trunc);
         json << "{\n  \"heap_allocations_after_init\": " << total_allocations
              << ",\n  \"heap\": {\n    \"preset\": " << json_string(preset.c_str())
              << ",\n    \"bound\": 0"
              << ",\n    \"heap_deallocations_after_init\": " << total_deallocations
-             << ",\n    \"method\": \"replaced global operator new/delete + --wrap of malloc, calloc, "
+             << ",\n    \"method\": \"replaced global operator new/delete + --wrap of malloc, "
+                "calloc, "
                 "realloc, free, aligned_alloc, posix_memalign, memalign; counted from the end of "
                 "init to the end of the last step of every scenario\"\n  },\n"
              << "  \"scenarios\": {" << scenarios_json.str() << "\n  }\n}\n";

@@ -82,7 +82,9 @@ struct AnyField {
 
 template <typename T, std::size_t... I>
 constexpr bool brace_initialisable(std::index_sequence<I...> /*unused*/) noexcept {
-    return requires { T{(static_cast<void>(I), AnyField{})...}; };
+    return requires {
+        T{(static_cast<void>(I), AnyField{})...};
+    };
 }
 
 template <typename T, std::size_t N = 0>
@@ -103,8 +105,9 @@ static_assert(detail::aggregate_field_count<kinetics::StationEstimate>() == 5U,
               "kinetics::StationEstimate changed: hash every field in hash_outputs()");
 // Inputs::tracker (the test bench's EM tracker and tip force) stays zero in every scenario: the
 // estimator does not read it yet.  The one that does extends ScenarioStep with it.
-static_assert(detail::aggregate_field_count<kinetics::Inputs>() == 6U,
-              "kinetics::Inputs changed: extend ScenarioStep (scenario_format.hpp) and to_inputs()");
+static_assert(
+    detail::aggregate_field_count<kinetics::Inputs>() == 6U,
+    "kinetics::Inputs changed: extend ScenarioStep (scenario_format.hpp) and to_inputs()");
 
 /// Feeds every field of `outputs`, in declaration order, into `hash`.
 constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noexcept {

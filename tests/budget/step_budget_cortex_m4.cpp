@@ -108,7 +108,8 @@ void systick_configure(std::uint32_t reload) noexcept {
 /// Ticks since position 0 of the period (count == reload) after `wraps` underflows.  The count
 /// runs reload, reload-1, ..., 1, 0 (one tick each) and the underflow exception comes with the
 /// step 1 -> 0, so at count 0 the wrap of the current period is already counted.
-[[gnu::always_inline]] inline std::int64_t position(std::uint32_t wraps, std::uint32_t value) noexcept {
+[[gnu::always_inline]] inline std::int64_t position(std::uint32_t wraps,
+                                                    std::uint32_t value) noexcept {
     const std::int64_t periods = static_cast<std::int64_t>(wraps) - (value == 0U ? 1 : 0);
     return periods * (static_cast<std::int64_t>(g_reload) + 1) +
            (static_cast<std::int64_t>(g_reload) - static_cast<std::int64_t>(value));

@@ -12,9 +12,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "decimal_text.hpp"
 #include "kinetics_harness.hpp"
 #include "output_hashes.hpp"
-#include "decimal_text.hpp"
 #include "portable_check.hpp"
 #include "scenario_registry.hpp"
 
@@ -137,7 +137,8 @@ SCOPEKIN_TEST(OutputIdentity, GoldenHashesCoverExactlyTheScenarios) {
     for (const OutputHash& golden : scopekin::test_data::golden_output_hashes) {
         bool has_scenario = false;
         for (const Scenario* scenario : scopekin::test_data::all_scenarios) {
-            has_scenario = has_scenario || scopekin::budget::same_name(scenario->name, golden.scenario);
+            has_scenario =
+                has_scenario || scopekin::budget::same_name(scenario->name, golden.scenario);
         }
         SCOPEKIN_EXPECT_TRUE(has_scenario);
         if (!has_scenario) {
@@ -151,10 +152,11 @@ SCOPEKIN_TEST(OutputIdentity, GoldenHashesCoverExactlyTheScenarios) {
 SCOPEKIN_TEST(OutputIdentity, EveryScenarioMatchesItsGoldenHash) {
     bool any_mismatch = false;
     for (const Scenario* scenario : scopekin::test_data::all_scenarios) {
-        const std::uint64_t hash = scopekin::budget::hash_scenario_outputs(*scenario, g_state, g_outputs);
+        const std::uint64_t hash =
+            scopekin::budget::hash_scenario_outputs(*scenario, g_state, g_outputs);
         const OutputHash* golden = find_golden(scenario->name);
-        const bool match = golden != nullptr && golden->steps == scenario->step_count &&
-                           golden->fnv1a64 == hash;
+        const bool match =
+            golden != nullptr && golden->steps == scenario->step_count && golden->fnv1a64 == hash;
         char hex[19];
         scopekin::budget::format_hex64(hash, hex);
         print_text(match ? "[ identity ] " : "[ MISMATCH ] ");

@@ -175,17 +175,17 @@ inline int run_all() noexcept {
 
 }  // namespace scopekin::portable_check
 
-#define SCOPEKIN_TEST(suite, name)                                                         \
-    static void scopekin_test_##suite##_##name();                                          \
+#define SCOPEKIN_TEST(suite, name)                                                          \
+    static void scopekin_test_##suite##_##name();                                           \
     static const ::scopekin::portable_check::Registrar scopekin_registrar_##suite##_##name{ \
-        #suite, #name, &scopekin_test_##suite##_##name};                                   \
+        #suite, #name, &scopekin_test_##suite##_##name};                                    \
     static void scopekin_test_##suite##_##name()
 
-#define SCOPEKIN_EXPECT_EQ(actual, expected)                                             \
+#define SCOPEKIN_EXPECT_EQ(actual, expected)                                                  \
     ::scopekin::portable_check::expect_eq((actual), (expected), #actual, #expected, __FILE__, \
                                           __LINE__)
 
-#define SCOPEKIN_EXPECT_TRUE(condition) \
+#define SCOPEKIN_EXPECT_TRUE(condition)                                                         \
     ::scopekin::portable_check::expect_true(static_cast<bool>(condition), #condition, __FILE__, \
                                             __LINE__)
 

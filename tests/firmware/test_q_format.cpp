@@ -10,9 +10,6 @@
 
 namespace {
 
-using scopekin::fixed_point::ProductAccumulator;
-using scopekin::fixed_point::Q16_16;
-using scopekin::fixed_point::Q16_16Vec3;
 using scopekin::fixed_point::abs_sat;
 using scopekin::fixed_point::add_sat;
 using scopekin::fixed_point::div_sat;
@@ -21,13 +18,18 @@ using scopekin::fixed_point::dot_sat;
 using scopekin::fixed_point::hypot_sat;
 using scopekin::fixed_point::mul_sat;
 using scopekin::fixed_point::neg_sat;
+using scopekin::fixed_point::ProductAccumulator;
+using scopekin::fixed_point::Q16_16;
+using scopekin::fixed_point::Q16_16Vec3;
 using scopekin::fixed_point::sqrt_sat;
 using scopekin::fixed_point::sub_sat;
 
 constexpr std::int32_t raw_max = std::numeric_limits<std::int32_t>::max();  //  2147483647
 constexpr std::int32_t raw_min = std::numeric_limits<std::int32_t>::min();  // -2147483648
 
-constexpr Q16_16 raw(std::int32_t r) { return Q16_16::from_raw(r); }
+constexpr Q16_16 raw(std::int32_t r) {
+    return Q16_16::from_raw(r);
+}
 
 // Hand-computed constants.
 constexpr Q16_16 one_and_half = raw(98304);      // 1.5   = 1.5   * 65536
@@ -42,8 +44,8 @@ static_assert(add_sat(Q16_16::max(), lsb) == Q16_16::max());
 // Rounding near the 64-bit limit must not overflow: (2^63 - 1) / 2^16 rounds up to 2^47.
 static_assert(scopekin::fixed_point::detail::rounding_shift_right(
                   std::numeric_limits<std::int64_t>::max(), 16) == (std::int64_t{1} << 47));
-static_assert(div_sat(Q16_16::from_int(3), Q16_16::from_int(2)).raw() == 98304);  // 1.5
-static_assert(sqrt_sat(Q16_16::from_int(4)).raw() == 131072);                      // 2
+static_assert(div_sat(Q16_16::from_int(3), Q16_16::from_int(2)).raw() == 98304);     // 1.5
+static_assert(sqrt_sat(Q16_16::from_int(4)).raw() == 131072);                        // 2
 static_assert(hypot_sat(Q16_16::from_int(3), Q16_16::from_int(4)).raw() == 327680);  // 5
 static_assert(dot_sat(std::array<Q16_16, 2>{half, half}, std::array<Q16_16, 2>{half, half}).raw() ==
               32768);  // 0.25 + 0.25
@@ -60,28 +62,28 @@ SCOPEKIN_TEST(Q16_16, FromIntIsExactInRangeAndSaturatesOutside) {
 }
 
 SCOPEKIN_TEST(Q16_16, ToIntRoundsToNearestTiesAwayFromZero) {
-    SCOPEKIN_EXPECT_EQ(raw(98304).to_int(), 2);    //  1.5        ->  2
-    SCOPEKIN_EXPECT_EQ(raw(-98304).to_int(), -2);  // -1.5        -> -2
-    SCOPEKIN_EXPECT_EQ(raw(98303).to_int(), 1);    //  1.49998    ->  1
-    SCOPEKIN_EXPECT_EQ(raw(163840).to_int(), 3);   //  2.5        ->  3
-    SCOPEKIN_EXPECT_EQ(raw(-32767).to_int(), 0);   // -0.49998    ->  0
+    SCOPEKIN_EXPECT_EQ(raw(98304).to_int(), 2);         //  1.5        ->  2
+    SCOPEKIN_EXPECT_EQ(raw(-98304).to_int(), -2);       // -1.5        -> -2
+    SCOPEKIN_EXPECT_EQ(raw(98303).to_int(), 1);         //  1.49998    ->  1
+    SCOPEKIN_EXPECT_EQ(raw(163840).to_int(), 3);        //  2.5        ->  3
+    SCOPEKIN_EXPECT_EQ(raw(-32767).to_int(), 0);        // -0.49998    ->  0
     SCOPEKIN_EXPECT_EQ(Q16_16::max().to_int(), 32768);  // 32767.99998 -> 32768
     SCOPEKIN_EXPECT_EQ(Q16_16::min().to_int(), -32768);
 }
 
 SCOPEKIN_TEST(Q16_16, MultiplicationOfExactValuesIsExact) {
-    SCOPEKIN_EXPECT_EQ(mul_sat(one_and_half, two_and_quarter).raw(), 221184);        // 3.375
+    SCOPEKIN_EXPECT_EQ(mul_sat(one_and_half, two_and_quarter).raw(), 221184);  // 3.375
     SCOPEKIN_EXPECT_EQ(mul_sat(neg_sat(one_and_half), two_and_quarter).raw(), -221184);
-    SCOPEKIN_EXPECT_EQ(mul_sat(half, half).raw(), 16384);                            // 0.25
+    SCOPEKIN_EXPECT_EQ(mul_sat(half, half).raw(), 16384);                              // 0.25
     SCOPEKIN_EXPECT_EQ((Q16_16::from_int(-7) * Q16_16::from_int(6)).raw(), -2752512);  // -42
 }
 
 SCOPEKIN_TEST(Q16_16, MultiplicationRoundsHalfAwayFromZero) {
-    SCOPEKIN_EXPECT_EQ(mul_sat(lsb, half).raw(), 1);         //  0.5 LSB  ->  1
-    SCOPEKIN_EXPECT_EQ(mul_sat(raw(-1), half).raw(), -1);    // -0.5 LSB  -> -1
-    SCOPEKIN_EXPECT_EQ(mul_sat(lsb, raw(32767)).raw(), 0);   //  0.49998 LSB -> 0
-    SCOPEKIN_EXPECT_EQ(mul_sat(raw(3), half).raw(), 2);      //  1.5 LSB  ->  2
-    SCOPEKIN_EXPECT_EQ(mul_sat(raw(-3), half).raw(), -2);    // -1.5 LSB  -> -2
+    SCOPEKIN_EXPECT_EQ(mul_sat(lsb, half).raw(), 1);           //  0.5 LSB  ->  1
+    SCOPEKIN_EXPECT_EQ(mul_sat(raw(-1), half).raw(), -1);      // -0.5 LSB  -> -1
+    SCOPEKIN_EXPECT_EQ(mul_sat(lsb, raw(32767)).raw(), 0);     //  0.49998 LSB -> 0
+    SCOPEKIN_EXPECT_EQ(mul_sat(raw(3), half).raw(), 2);        //  1.5 LSB  ->  2
+    SCOPEKIN_EXPECT_EQ(mul_sat(raw(-3), half).raw(), -2);      // -1.5 LSB  -> -2
     SCOPEKIN_EXPECT_EQ(mul_sat(raw(5), raw(16384)).raw(), 1);  // 5 * 0.25 = 1.25 LSB -> 1
 }
 
@@ -106,8 +108,8 @@ SCOPEKIN_TEST(Q16_16, AdditionAndSubtractionSaturate) {
 }
 
 SCOPEKIN_TEST(Q16_16, FromRatioRoundsOneThird) {
-    SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(1, 3).raw(), 21845);    //  21845.33 -> 21845
-    SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(2, 3).raw(), 43691);    //  43690.67 -> 43691
+    SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(1, 3).raw(), 21845);  //  21845.33 -> 21845
+    SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(2, 3).raw(), 43691);  //  43690.67 -> 43691
     SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(-1, 3).raw(), -21845);
     SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(1, -3).raw(), -21845);
     SCOPEKIN_EXPECT_EQ(Q16_16::from_ratio(-2, -3).raw(), 43691);
@@ -132,7 +134,7 @@ SCOPEKIN_TEST(Q16_16, Dot3IsExactForExactInputs) {
     const Q16_16Vec3 b{Q16_16::from_int(4), Q16_16::from_int(-5), Q16_16::from_int(6)};
     SCOPEKIN_EXPECT_EQ(dot3_sat(a, b).raw(), 786432);  // 4 - 10 + 18 = 12
 
-    const Q16_16Vec3 c{one_and_half, half, raw(-16384)};                      // 1.5, 0.5, -0.25
+    const Q16_16Vec3 c{one_and_half, half, raw(-16384)};  // 1.5, 0.5, -0.25
     const Q16_16Vec3 d{two_and_quarter, Q16_16::from_int(4), Q16_16::from_int(8)};
     SCOPEKIN_EXPECT_EQ(dot3_sat(c, d).raw(), 221184);  // 3.375 + 2 - 2 = 3.375
 }
@@ -163,11 +165,11 @@ SCOPEKIN_TEST(Q16_16, Dot3SaturatesAndCancelsCorrectly) {
 // ------------------------------------------------------------------------------------------------
 
 SCOPEKIN_TEST(Q16_16, DivisionOfExactValuesIsExact) {
-    SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::from_int(3), Q16_16::from_int(2)).raw(), 98304);  // 1.5
+    SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::from_int(3), Q16_16::from_int(2)).raw(), 98304);     // 1.5
     SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::from_int(-9), Q16_16::from_int(4)).raw(), -147456);  // -2.25
-    SCOPEKIN_EXPECT_EQ(div_sat(one_and_half, half).raw(), 196608);                        // 3
-    SCOPEKIN_EXPECT_EQ((Q16_16::from_int(-42) / Q16_16::from_int(-6)).raw(), 458752);     // 7
-    SCOPEKIN_EXPECT_EQ(div_sat(lsb, lsb).raw(), 65536);                                   // 1
+    SCOPEKIN_EXPECT_EQ(div_sat(one_and_half, half).raw(), 196608);                          // 3
+    SCOPEKIN_EXPECT_EQ((Q16_16::from_int(-42) / Q16_16::from_int(-6)).raw(), 458752);       // 7
+    SCOPEKIN_EXPECT_EQ(div_sat(lsb, lsb).raw(), 65536);                                     // 1
     SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::max(), Q16_16::from_int(1)).raw(), raw_max);
     SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::min(), Q16_16::from_int(1)).raw(), raw_min);
     SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::max(), Q16_16::from_int(-1)).raw(), -2147483647);
@@ -183,7 +185,7 @@ SCOPEKIN_TEST(Q16_16, DivisionRoundsToNearest) {
     SCOPEKIN_EXPECT_EQ(div_sat(Q16_16::from_int(1000), Q16_16::from_int(7)).raw(), 9362286);
     // Tiny divisor: (100 LSB) / (3 LSB) = 33.333: 2184533.33 -> 2184533.
     SCOPEKIN_EXPECT_EQ(div_sat(raw(100), raw(3)).raw(), 2184533);
-    SCOPEKIN_EXPECT_EQ(div_sat(lsb, Q16_16::from_int(3)).raw(), 0);  // 0.33 LSB -> 0
+    SCOPEKIN_EXPECT_EQ(div_sat(lsb, Q16_16::from_int(3)).raw(), 0);     // 0.33 LSB -> 0
     SCOPEKIN_EXPECT_EQ(div_sat(raw(7), Q16_16::from_int(4)).raw(), 2);  // 1.75 LSB -> 2
     SCOPEKIN_EXPECT_EQ(div_sat(raw(5), Q16_16::from_int(4)).raw(), 1);  // 1.25 LSB -> 1
 }
@@ -239,9 +241,9 @@ SCOPEKIN_TEST(Q16_16, AbsSaturatesOnlyAtMin) {
 }
 
 SCOPEKIN_TEST(Q16_16, SquareRootIsCorrectlyRounded) {
-    SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(4)).raw(), 131072);  // 2
-    SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(1)).raw(), 65536);   // 1
-    SCOPEKIN_EXPECT_EQ(sqrt_sat(raw(16384)).raw(), 32768);            // sqrt(0.25) = 0.5
+    SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(4)).raw(), 131072);      // 2
+    SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(1)).raw(), 65536);       // 1
+    SCOPEKIN_EXPECT_EQ(sqrt_sat(raw(16384)).raw(), 32768);                // sqrt(0.25) = 0.5
     SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(2500)).raw(), 3276800);  // 50
     // sqrt(2) * 65536 = 92681.900 -> 92682 (rounds up).
     SCOPEKIN_EXPECT_EQ(sqrt_sat(Q16_16::from_int(2)).raw(), 92682);

@@ -133,7 +133,8 @@ RandomProblem random_problem(std::mt19937_64& rng, std::size_t n, bool frictionl
 // 1. Single contact, closed forms
 // ------------------------------------------------------------------------------------------------
 
-TEST(GaussSeidelContactBlockDiagonal, OneSweepSolvesIndependentContactsAndIgnoresOffDiagonalBlocks) {
+TEST(GaussSeidelContactBlockDiagonal,
+     OneSweepSolvesIndependentContactsAndIgnoresOffDiagonalBlocks) {
     // Two contacts, W = diag blocks only, flagged block_diagonal, with garbage in the off-diagonal
     // blocks (never read). Each contact is then its own single-contact problem, solved in one
     // sweep: contact 0 sticks, f = -W^-1 q = (0.5, -0.1, 0.04) (W = diag(2, .5, .5),
@@ -141,7 +142,8 @@ TEST(GaussSeidelContactBlockDiagonal, OneSweepSolvesIndependentContactsAndIgnore
     Problem p{};
     p.contact_count = 2;
     p.block_diagonal = true;
-    for (std::size_t a = 0; a < 2; ++a) p.block(a, a) = {2.0, 0, 0, 0, 0.5, 0, 0, 0, 0.5};
+    for (std::size_t a = 0; a < 2; ++a)
+        p.block(a, a) = {2.0, 0, 0, 0, 0.5, 0, 0, 0, 0.5};
     p.block(0, 1) = {7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0};
     p.block(1, 0) = {-3.0, 1.0, 2.0, 5.0, -4.0, 1.0, 9.0, 9.0, 9.0};
     p.free_displacement[0] = {-1.0, 0.05, -0.02};
@@ -345,9 +347,8 @@ TEST(GaussSeidelContactRandom, ThousandProblemsSatisfyTheContactLawsOfTheirState
     std::sort(sweeps_1e6.begin(), sweeps_1e6.end());
     std::cout << "[ sweeps at 1e-6 N ] median " << sweeps_1e6[sweeps_1e6.size() / 2] << ", 90% "
               << sweeps_1e6[sweeps_1e6.size() * 9 / 10] << ", max " << sweeps_1e6.back()
-              << "; states: separated " << counts[0] << ", sticking " << counts[1]
-              << ", slipping " << counts[2] << "; worst residual at 1e-10 N: " << worst_residual
-              << " N\n";
+              << "; states: separated " << counts[0] << ", sticking " << counts[1] << ", slipping "
+              << counts[2] << "; worst residual at 1e-10 N: " << worst_residual << " N\n";
     // Every branch was exercised.
     EXPECT_GT(counts[0], 100U);
     EXPECT_GT(counts[1], 100U);
@@ -378,7 +379,8 @@ Eigen::VectorXd enumerate_lcp(const Eigen::MatrixXd& a, const Eigen::VectorXd& b
             for (Eigen::Index r = 0; r < k; ++r) {
                 ba(r) = b(act[static_cast<std::size_t>(r)]);
                 for (Eigen::Index c = 0; c < k; ++c) {
-                    aa(r, c) = a(act[static_cast<std::size_t>(r)], act[static_cast<std::size_t>(c)]);
+                    aa(r, c) =
+                        a(act[static_cast<std::size_t>(r)], act[static_cast<std::size_t>(c)]);
                 }
             }
             const Eigen::VectorXd xa = aa.ldlt().solve(-ba);

@@ -40,8 +40,10 @@ void write_number(const char* label, std::uint32_t value) {
     } while (value != 0U && n < 15);
     char line[64] = {};
     int pos = 0;
-    for (const char* c = label; *c != '\0' && pos < 40; ++c) line[pos++] = *c;
-    while (n > 0) line[pos++] = text[--n];
+    for (const char* c = label; *c != '\0' && pos < 40; ++c)
+        line[pos++] = *c;
+    while (n > 0)
+        line[pos++] = text[--n];
     line[pos++] = '\n';
     scopekin_semihost_write0(line);
 }
@@ -97,6 +99,7 @@ int main() {
                     statuses >= kDemoPeriods / 20U && last.estimate_valid && !last.inputs_stale &&
                     last.tip_path_mm > Q16_16::from_int(50) && g_box.box_faults() == 0U &&
                     g_box.counters().frames_read == 2U * 5U * kDemoPeriods;
-    scopekin_semihost_write0(ok ? "scopekin box (cortex-m4): PASS\n" : "scopekin box (cortex-m4): FAIL\n");
+    scopekin_semihost_write0(ok ? "scopekin box (cortex-m4): PASS\n"
+                                : "scopekin box (cortex-m4): FAIL\n");
     return ok ? 0 : 1;
 }

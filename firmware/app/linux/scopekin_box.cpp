@@ -82,9 +82,12 @@ nlohmann::json stats_json(const Box& box, double elapsed_s, std::uint64_t record
     json["periods"] = counters.periods;
     json["period_overruns"] = counters.period_overruns;
     json["box_state"] = state_name(box.box.box_state());
-    json["can"] = {{"received", can.received},       {"sent", can.sent},
-                   {"dropped", can.dropped},         {"send_failures", can.send_failures},
-                   {"error_frames", can.error_frames}, {"bus_off_events", can.bus_off_events},
+    json["can"] = {{"received", can.received},
+                   {"sent", can.sent},
+                   {"dropped", can.dropped},
+                   {"send_failures", can.send_failures},
+                   {"error_frames", can.error_frames},
+                   {"bus_off_events", can.bus_off_events},
                    {"backend_errors", can.backend_errors}};
     json["box"] = {{"frames_read", counters.frames_read},
                    {"unknown_ids", counters.unknown_ids},
@@ -100,10 +103,11 @@ nlohmann::json stats_json(const Box& box, double elapsed_s, std::uint64_t record
                               {"sensor_status", handle.sensor_status},
                               {"counter_gaps", handle.counter_gaps},
                               {"stale_events", handle.stale_events}};
-    json["last_output"] = {{"step_index", outputs.step_index},
-                           {"tip_path_mm", static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0},
-                           {"fault_flags", outputs.fault_flags},
-                           {"self_lock_alarm", outputs.self_lock_alarm}};
+    json["last_output"] = {
+        {"step_index", outputs.step_index},
+        {"tip_path_mm", static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0},
+        {"fault_flags", outputs.fault_flags},
+        {"self_lock_alarm", outputs.self_lock_alarm}};
     json["record"] = {{"lines", record_lines}, {"write_errors", record_errors}};
     return json;
 }
@@ -118,19 +122,24 @@ int main(int argc, char** argv) {
         "estimator every period and publishes the estimate, contact forces and alarms on CAN "
         "(messages: firmware/protocol/scopekin.dbc). Stops cleanly on SIGINT/SIGTERM.\n"
         "Exit status: 0 stopped, 2 bad usage or a device that cannot be opened, 3 I/O error."};
-    app.add_option("--can", options.can_interface, "SocketCAN interface (e.g. can0, vcan0)")->required();
+    app.add_option("--can", options.can_interface, "SocketCAN interface (e.g. can0, vcan0)")
+        ->required();
     app.add_option("--serial", options.serial_device,
                    "serial device of the EM tracker / tip force sensor (e.g. /dev/ttyUSB0)");
     app.add_option("--baud", options.baud, "serial line rate, bit/s")->capture_default_str();
     app.add_option("--period-ms", options.period_ms, "period of the cyclic executive, ms")
-        ->check(CLI::Range(1, 1000))->capture_default_str();
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
     app.add_option("--record", options.record_path,
                    "record all CAN traffic (received and sent) to FILE in candump log format");
-    app.add_option("--duration-s", options.duration_s, "stop after this many seconds (0: run until a signal)")
-        ->check(CLI::Range(0.0, 1.0e7))->capture_default_str();
+    app.add_option("--duration-s", options.duration_s,
+                   "stop after this many seconds (0: run until a signal)")
+        ->check(CLI::Range(0.0, 1.0e7))
+        ->capture_default_str();
     app.add_option("--stale-periods", options.stale_periods,
                    "a handle sensor is stale after this many periods without a valid sample")
-        ->check(CLI::Range(1, 1000))->capture_default_str();
+        ->check(CLI::Range(1, 1000))
+        ->capture_default_str();
     app.add_option("--stats", options.stats_path, "write the final counters as JSON to FILE");
     app.add_flag("--quiet", options.quiet, "no progress line (once a second) on stderr");
     app.set_version_flag("--version", "scopekin-box 0.1.0");
@@ -176,11 +185,12 @@ int main(int argc, char** argv) {
     config.kinetics.tables = &scopekin::kinetics::default_reduced_tables();
     config.handle_sensors.stale_after_us = options.stale_periods * config.period_us;
     if (!box.box.init(config, *bus, serial)) {
-        std::fprintf(stderr, "scopekin-box: the estimator refused its configuration: running without "
-                             "an estimate (BoxState no_estimate)\n");
+        std::fprintf(stderr,
+                     "scopekin-box: the estimator refused its configuration: running without "
+                     "an estimate (BoxState no_estimate)\n");
     }
 
-    struct sigaction action{};
+    struct sigaction action {};
     action.sa_handler = on_stop_signal;
     sigemptyset(&action.sa_mask);
     sigaction(SIGINT, &action, nullptr);
@@ -214,16 +224,15 @@ int main(int argc, char** argv) {
             next_progress_us += 1000000U;
             const auto& outputs = box.box.outputs();
             const auto can = box.box.can_counters();
-            std::fprintf(stderr,
-                         "scopekin-box: t=%.0f s periods=%u received=%u dropped=%u sent=%u "
-                         "state=%s tip=%.1f mm faults=0x%04x/0x%04x self_lock=%d\n",
-                         static_cast<double>(release_us - start_us) / 1.0e6,
-                         box.box.counters().periods, can.received, can.dropped, can.sent,
-                         state_name(box.box.box_state()),
-                         static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0,
-                         static_cast<unsigned>(outputs.fault_flags),
-                         static_cast<unsigned>(box.box.box_faults()),
-                         outputs.self_lock_alarm ? 1 : 0);
+            std::fprintf(
+                stderr,
+                "scopekin-box: t=%.0f s periods=%u received=%u dropped=%u sent=%u "
+                "state=%s tip=%.1f mm faults=0x%04x/0x%04x self_lock=%d\n",
+                static_cast<double>(release_us - start_us) / 1.0e6, box.box.counters().periods,
+                can.received, can.dropped, can.sent, state_name(box.box.box_state()),
+                static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0,
+                static_cast<unsigned>(outputs.fault_flags),
+                static_cast<unsigned>(box.box.box_faults()), outputs.self_lock_alarm ? 1 : 0);
         }
     }
     const double elapsed_s = static_cast<double>(box.clock.now_us() - start_us) / 1.0e6;
@@ -237,10 +246,12 @@ int main(int argc, char** argv) {
         record_errors = box.recorder->write_errors();
         if (!io_ok) {
             std::fprintf(stderr, "scopekin-box: %llu CAN record lines could not be written to %s\n",
-                         static_cast<unsigned long long>(record_errors), options.record_path.c_str());
+                         static_cast<unsigned long long>(record_errors),
+                         options.record_path.c_str());
         }
     }
-    const nlohmann::json stats = stats_json(box, elapsed_s, record_lines, record_errors, stop_signal.load());
+    const nlohmann::json stats =
+        stats_json(box, elapsed_s, record_lines, record_errors, stop_signal.load());
     if (!options.stats_path.empty()) {
         std::ofstream out(options.stats_path);
         out << stats.dump(2) << "\n";
@@ -250,7 +261,8 @@ int main(int argc, char** argv) {
         }
     }
     if (!options.quiet) {
-        std::fprintf(stderr, "scopekin-box: stopped after %.1f s: %s\n", elapsed_s, stats.dump().c_str());
+        std::fprintf(stderr, "scopekin-box: stopped after %.1f s: %s\n", elapsed_s,
+                     stats.dump().c_str());
     }
     return io_ok ? 0 : 3;
 }

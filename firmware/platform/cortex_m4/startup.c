@@ -60,31 +60,33 @@ SCOPEKIN_WEAK_HANDLER(SysTick_Handler);
 #define SCOPEKIN_AN386_IRQ_COUNT 32
 
 #define SCOPEKIN_IRQ_HANDLERS_4 Default_Handler, Default_Handler, Default_Handler, Default_Handler,
-#define SCOPEKIN_IRQ_HANDLERS_32                                                   \
-    SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4      \
-    SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4      \
-    SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4
+#define SCOPEKIN_IRQ_HANDLERS_32                                                \
+    SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4     \
+        SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4 \
+            SCOPEKIN_IRQ_HANDLERS_4 SCOPEKIN_IRQ_HANDLERS_4
 
 /* Vector table entries 1.. (entry 0, the initial SP, comes from the linker script). */
-__attribute__((section(".isr_vector"), used))
-static void (*const vector_table[15 + SCOPEKIN_AN386_IRQ_COUNT])(void) = {
+__attribute__((section(".isr_vector"),
+               used)) static void (*const vector_table[15 + SCOPEKIN_AN386_IRQ_COUNT])(void) = {
     Reset_Handler,
     NMI_Handler,
     HardFault_Handler,
     MemManage_Handler,
     BusFault_Handler,
     UsageFault_Handler,
-    0, 0, 0, 0,          /* reserved */
+    0,
+    0,
+    0,
+    0, /* reserved */
     SVC_Handler,
     DebugMon_Handler,
-    0,                   /* reserved */
+    0, /* reserved */
     PendSV_Handler,
     SysTick_Handler,
     SCOPEKIN_IRQ_HANDLERS_32 /* IRQ 0..31 */
 };
 
-static void write_decimal(uint32_t value)
-{
+static void write_decimal(uint32_t value) {
     char digits[11];
     size_t n = sizeof digits;
     digits[--n] = '\0';
@@ -95,8 +97,7 @@ static void write_decimal(uint32_t value)
     scopekin_semihost_write0(&digits[n]);
 }
 
-void Default_Handler(void)
-{
+void Default_Handler(void) {
     uint32_t ipsr;
     __asm__ volatile("mrs %0, ipsr" : "=r"(ipsr));
     scopekin_semihost_write0("\n*** scopekin: unexpected exception ");
@@ -105,8 +106,7 @@ void Default_Handler(void)
     scopekin_semihost_exit(SCOPEKIN_EXIT_FAULT);
 }
 
-_Noreturn void Reset_Handler(void)
-{
+_Noreturn void Reset_Handler(void) {
     /* CPACR: CP10 and CP11 full access, before any floating-point instruction. */
     volatile uint32_t* const cpacr = (volatile uint32_t*)0xE000ED88u;
     *cpacr |= (0xFu << 20);
@@ -134,8 +134,7 @@ _Noreturn void Reset_Handler(void)
 
 /* No heap (hard rule): every allocation attempt fails. */
 void* _sbrk(ptrdiff_t increment);
-void* _sbrk(ptrdiff_t increment)
-{
+void* _sbrk(ptrdiff_t increment) {
     (void)increment;
     errno = ENOMEM;
     return (void*)-1;
@@ -143,15 +142,15 @@ void* _sbrk(ptrdiff_t increment)
 
 /* exit()/abort() end up here. */
 _Noreturn void _exit(int status);
-_Noreturn void _exit(int status)
-{
+_Noreturn void _exit(int status) {
     scopekin_semihost_exit(status);
 }
 
 /* assert() failures: report through semihosting instead of newlib's stdio. */
-_Noreturn void __assert_func(const char* file, int line, const char* function, const char* expression);
-_Noreturn void __assert_func(const char* file, int line, const char* function, const char* expression)
-{
+_Noreturn void __assert_func(const char* file, int line, const char* function,
+                             const char* expression);
+_Noreturn void __assert_func(const char* file, int line, const char* function,
+                             const char* expression) {
     scopekin_semihost_write0("\n*** scopekin: assertion failed: ");
     scopekin_semihost_write0(expression != NULL ? expression : "?");
     scopekin_semihost_write0("\n    in ");

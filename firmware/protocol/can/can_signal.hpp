@@ -25,11 +25,11 @@
 namespace scopekin::protocol {
 
 struct CanSignal {
-    const char* name;              ///< as in scopekin.dbc
-    std::uint8_t start_bit;        ///< 0..63
-    std::uint8_t bit_length;       ///< 1..32
+    const char* name;         ///< as in scopekin.dbc
+    std::uint8_t start_bit;   ///< 0..63
+    std::uint8_t bit_length;  ///< 1..32
     bool is_signed;
-    std::int32_t factor_numerator;    ///< physical = raw * numerator / denominator
+    std::int32_t factor_numerator;  ///< physical = raw * numerator / denominator
     std::int32_t factor_denominator;
 };
 
@@ -63,7 +63,7 @@ constexpr void write_raw(std::array<std::uint8_t, 8>& data, const CanSignal& sig
                          std::int64_t raw) {
     const std::int64_t clamped =
         raw < raw_min(signal) ? raw_min(signal) : (raw > raw_max(signal) ? raw_max(signal) : raw);
-    const auto bits = static_cast<std::uint64_t>(clamped);  // two's complement, low bits kept
+    const auto bits = static_cast<std::uint64_t>(clamped);   // two's complement, low bits kept
     for (std::uint32_t k = 0; k < signal.bit_length; ++k) {  // bound: bit_length <= 32
         const std::uint32_t bit = signal.start_bit + k;
         const auto mask = static_cast<std::uint8_t>(1U << (bit % 8U));
@@ -79,8 +79,8 @@ constexpr void write_raw(std::array<std::uint8_t, 8>& data, const CanSignal& sig
 [[nodiscard]] constexpr fixed_point::Q16_16 raw_to_q16(std::int64_t raw, const CanSignal& signal,
                                                        bool& saturated) {
     const std::int64_t numerator = raw * signal.factor_numerator * fixed_point::Q16_16::one_raw;
-    const std::int32_t q = fixed_point::detail::divide_round_saturate(numerator,
-                                                                      signal.factor_denominator);
+    const std::int32_t q =
+        fixed_point::detail::divide_round_saturate(numerator, signal.factor_denominator);
     // The rounded quotient before saturation (|numerator| < 2^56, so 2|numerator| + d fits):
     // magnitude rounded half up = ties away from zero, as divide_round_saturate rounds.
     const std::int64_t denominator = signal.factor_denominator;

@@ -32,7 +32,7 @@ constexpr CanSignal kKineticFaults{"KineticFaults", 16, 16, false, 1, 1};
 constexpr CanSignal kDriverFaults{"DriverFaults", 32, 16, false, 1, 1};
 constexpr CanSignal kOverruns{"PeriodOverruns", 48, 8, false, 1, 1};
 constexpr CanSignal kTrackerFaults{"TrackerFaults", 56, 8, false, 1, 1};
-constexpr std::array kSignals{kHeartbeat, kState, kCanState, kKineticFaults,
+constexpr std::array kSignals{kHeartbeat,    kState,    kCanState,     kKineticFaults,
                               kDriverFaults, kOverruns, kTrackerFaults};
 constexpr std::uint8_t kLength = 8;
 }  // namespace box_status
@@ -57,7 +57,7 @@ constexpr CanSignal kActive{"ActiveStations", 36, 4, false, 1, 1};
 constexpr CanSignal kDistalSticking{"DistalSticking", 40, 4, false, 1, 1};
 constexpr CanSignal kStickingMask{"StickingMask", 44, 12, false, 1, 1};
 constexpr CanSignal kStep{"StepCounter", 56, 8, false, 1, 1};
-constexpr std::array kSignals{kMaxForce, kMaxPath, kMaxStation, kActive,
+constexpr std::array kSignals{kMaxForce,       kMaxPath,      kMaxStation, kActive,
                               kDistalSticking, kStickingMask, kStep};
 constexpr std::uint8_t kLength = 8;
 }  // namespace contact_summary
@@ -148,7 +148,9 @@ bool get_flag(const hal::CanFrame& frame, const CanSignal& signal) {
 
 }  // namespace
 
-std::span<const MessageLayout> message_layouts() { return kLayouts; }
+std::span<const MessageLayout> message_layouts() {
+    return kLayouts;
+}
 
 const MessageLayout* find_message_layout(std::uint32_t id) {
     for (const MessageLayout& layout : kLayouts) {  // bound: 8 messages

@@ -40,33 +40,43 @@ inline constexpr std::uint32_t kStationForcesId = 0x190;
 
 /// 0x110, 1 kHz.  CellStatus bits: 0 overload, 1 sensor fault, 2 not zeroed.
 struct HandleForceTorque {
-    Q16_16 force_N{};       ///< axial, + pushing in; 0.005 N resolution
-    Q16_16 torque_Nmm{};    ///< about the shaft axis; 0.1 N·mm resolution
+    Q16_16 force_N{};     ///< axial, + pushing in; 0.005 N resolution
+    Q16_16 torque_Nmm{};  ///< about the shaft axis; 0.1 N·mm resolution
     std::uint8_t status{0};
     std::uint8_t counter{0};  ///< 0..15, +1 per frame
 };
 
 /// 0x111, 1 kHz.  EncoderStatus bits: 0 encoder fault, 1 not referenced.
 struct InsertionRoll {
-    Q16_16 insertion_mm{};  ///< 0.01 mm resolution; the signal spans ±83 m, Q16.16 only ±32 m
-    Q16_16 roll_rad{};      ///< unwrapped; 0.0001 rad resolution
+    Q16_16 insertion_mm{};    ///< 0.01 mm resolution; the signal spans ±83 m, Q16.16 only ±32 m
+    Q16_16 roll_rad{};        ///< unwrapped; 0.0001 rad resolution
     std::uint8_t status{0};   ///< 0..15
     std::uint8_t counter{0};  ///< 0..15
 };
 
 // ---- outputs: the box -------------------------------------------------------------------------
 
-enum class BoxState : std::uint8_t { starting = 0, running = 1, degraded = 2, no_estimate = 3 };
-enum class CanState : std::uint8_t { error_active = 0, warning = 1, error_passive = 2, bus_off = 3 };
+enum class BoxState : std::uint8_t {
+    starting = 0,
+    running = 1,
+    degraded = 2,
+    no_estimate = 3
+};
+enum class CanState : std::uint8_t {
+    error_active = 0,
+    warning = 1,
+    error_passive = 2,
+    bus_off = 3
+};
 
 /// 0x180: every 20 periods and at once when a fault bit changes.
 struct BoxStatus {
     std::uint8_t heartbeat{0};
     BoxState state{BoxState::starting};
     CanState can_state{CanState::error_active};
-    std::uint16_t kinetic_faults{0};   ///< kinetics::FaultFlag bits
-    std::uint16_t driver_faults{0};    ///< messages::BoxFault bits
-    std::uint8_t period_overruns{0};   ///< saturating
+    std::uint16_t kinetic_faults{0};  ///< kinetics::FaultFlag bits
+    std::uint16_t driver_faults{0};   ///< messages::BoxFault bits
+    std::uint8_t period_overruns{0};  ///< saturating
     std::uint8_t tracker_faults{0};
 };
 
@@ -83,8 +93,8 @@ struct KineticEstimate {
 
 /// 0x182: every period.
 struct ContactSummary {
-    Q16_16 max_contact_force_N{};   ///< 0.001 N, 0..65.535 N
-    Q16_16 max_contact_path_mm{};   ///< 0.1 mm, 0..6553.5 mm
+    Q16_16 max_contact_force_N{};         ///< 0.001 N, 0..65.535 N
+    Q16_16 max_contact_path_mm{};         ///< 0.1 mm, 0..6553.5 mm
     std::uint8_t max_contact_station{0};  ///< 0..15
     std::uint8_t active_stations{0};      ///< 0..15
     std::uint8_t distal_sticking{0};      ///< 0..15
@@ -97,8 +107,8 @@ struct Alarms {
     bool self_lock{false};
     std::uint8_t contact_force_level{0};  ///< 0 normal, 1 warning, 2 critical
     bool valid{false};
-    std::uint8_t self_lock_raised{0};     ///< wraps
-    std::uint8_t critical_raised{0};      ///< wraps
+    std::uint8_t self_lock_raised{0};  ///< wraps
+    std::uint8_t critical_raised{0};   ///< wraps
     std::uint8_t step_counter{0};
 };
 
@@ -130,12 +140,12 @@ struct BoxCounter {
 
 /// 0x190: one contact station per period, round robin over the active stations.
 struct StationForces {
-    std::uint8_t station{0};          ///< 0..15 (0 = tip)
-    std::uint8_t state{0};            ///< 0 separated, 1 sticking, 2 slipping, 3 degenerate
-    Q16_16 normal_force_N{};          ///< 0.001 N
-    Q16_16 tangential_force_N{};      ///< 0.001 N
-    Q16_16 path_mm{};                 ///< 0.1 mm
-    Q16_16 arc_from_tip_mm{};         ///< 5 mm
+    std::uint8_t station{0};      ///< 0..15 (0 = tip)
+    std::uint8_t state{0};        ///< 0 separated, 1 sticking, 2 slipping, 3 degenerate
+    Q16_16 normal_force_N{};      ///< 0.001 N
+    Q16_16 tangential_force_N{};  ///< 0.001 N
+    Q16_16 path_mm{};             ///< 0.1 mm
+    Q16_16 arc_from_tip_mm{};     ///< 5 mm
 };
 
 // ---- layouts (as in scopekin.dbc) --------------------------------------------------------------

@@ -31,21 +31,21 @@ enum class EmTrackerMessageType : std::uint8_t {
     tip_force = 0x02U,  ///< tip contact force
 };
 
-inline constexpr std::size_t kEmPosePayloadSize = 26;      ///< see EmPoseMessage
-inline constexpr std::size_t kTipForcePayloadSize = 11;    ///< see TipForceMessage
+inline constexpr std::size_t kEmPosePayloadSize = 26;    ///< see EmPoseMessage
+inline constexpr std::size_t kTipForcePayloadSize = 11;  ///< see TipForceMessage
 inline constexpr std::size_t kEmTrackerMaxPayloadSize = 26;
-inline constexpr std::size_t kEmTrackerMaxFrameSize = kEmTrackerOverhead + kEmTrackerMaxPayloadSize;  // 32
-inline constexpr std::size_t kEmTrackerMinFrameSize = kEmTrackerOverhead + kTipForcePayloadSize;      // 17
+inline constexpr std::size_t kEmTrackerMaxFrameSize =
+    kEmTrackerOverhead + kEmTrackerMaxPayloadSize;  // 32
+inline constexpr std::size_t kEmTrackerMinFrameSize =
+    kEmTrackerOverhead + kTipForcePayloadSize;  // 17
 
 /// Payload length a message type must have; 0 for an unknown type.
 [[nodiscard]] constexpr std::size_t em_tracker_payload_size(std::uint8_t type) noexcept {
     switch (type) {
-        case static_cast<std::uint8_t>(EmTrackerMessageType::pose):
-            return kEmPosePayloadSize;
+        case static_cast<std::uint8_t>(EmTrackerMessageType::pose): return kEmPosePayloadSize;
         case static_cast<std::uint8_t>(EmTrackerMessageType::tip_force):
             return kTipForcePayloadSize;
-        default:
-            return 0;
+        default: return 0;
     }
 }
 
@@ -84,8 +84,8 @@ inline constexpr std::array<std::uint16_t, 256> kCrc16CcittTable = make_crc16_cc
 }
 
 /// CRC-16/CCITT-FALSE of `bytes` (work: bytes.size()).
-[[nodiscard]] constexpr std::uint16_t em_tracker_crc16(std::span<const std::uint8_t> bytes,
-                                                       std::uint16_t crc = kEmTrackerCrcInit) noexcept {
+[[nodiscard]] constexpr std::uint16_t em_tracker_crc16(
+    std::span<const std::uint8_t> bytes, std::uint16_t crc = kEmTrackerCrcInit) noexcept {
     for (const std::uint8_t byte : bytes) {  // bound: bytes.size()
         crc = em_tracker_crc16_update(crc, byte);
     }
@@ -96,10 +96,10 @@ inline constexpr std::array<std::uint16_t, 256> kCrc16CcittTable = make_crc16_cc
 
 /// Message type 0x01: one sensor's pose.
 struct EmPoseMessage {
-    std::uint32_t device_time_us{0};              ///< tracker clock, wraps at 2^32 µs (71.6 min)
-    std::uint8_t sensor_id{0};                    ///< 0 tip, 1 20 cm, 2 handle, 3 sigmoid
-    std::uint8_t status{0};                       ///< kEmStatus* bits, 0 = good
-    std::array<std::int32_t, 3> position_um{};    ///< x, y, z in µm, tracker frame
+    std::uint32_t device_time_us{0};                ///< tracker clock, wraps at 2^32 µs (71.6 min)
+    std::uint8_t sensor_id{0};                      ///< 0 tip, 1 20 cm, 2 handle, 3 sigmoid
+    std::uint8_t status{0};                         ///< kEmStatus* bits, 0 = good
+    std::array<std::int32_t, 3> position_um{};      ///< x, y, z in µm, tracker frame
     std::array<std::int16_t, 4> orientation_q14{};  ///< unit quaternion w, x, y, z; 1.0 = 16384
 
     friend constexpr bool operator==(const EmPoseMessage&, const EmPoseMessage&) = default;
@@ -107,8 +107,8 @@ struct EmPoseMessage {
 
 /// Message type 0x02: tip contact force.
 struct TipForceMessage {
-    std::uint32_t device_time_us{0};       ///< force sensor clock, wraps at 2^32 µs
-    std::uint8_t status{0};                ///< kTipForceStatus* bits, 0 = good
+    std::uint32_t device_time_us{0};         ///< force sensor clock, wraps at 2^32 µs
+    std::uint8_t status{0};                  ///< kTipForceStatus* bits, 0 = good
     std::array<std::int16_t, 3> force_mN{};  ///< x, y, z in mN (z along the scope axis)
 
     friend constexpr bool operator==(const TipForceMessage&, const TipForceMessage&) = default;
@@ -121,7 +121,7 @@ enum EmPoseStatus : std::uint8_t {
 };
 /// Status bits of a tip force message.
 enum TipForceStatus : std::uint8_t {
-    kTipForceStatusSaturated = 1U << 0U,     ///< the sensing element is at its full scale
+    kTipForceStatusSaturated = 1U << 0U,  ///< the sensing element is at its full scale
     kTipForceStatusNotCalibrated = 1U << 1U,
 };
 

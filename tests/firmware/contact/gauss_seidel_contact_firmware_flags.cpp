@@ -23,9 +23,10 @@ template ContactSolveReport<fixed_point::Q16_16, 16> solve_contacts<fixed_point:
     const ContactProblem<fixed_point::Q16_16, 16>&, const GaussSeidelSettings<fixed_point::Q16_16>&,
     ContactForces<fixed_point::Q16_16, 16>&) noexcept;
 template ContactResiduals<fixed_point::Q16_16> evaluate_contact_residuals<fixed_point::Q16_16, 16>(
-    const ContactProblem<fixed_point::Q16_16, 16>&, const ContactForces<fixed_point::Q16_16, 16>&) noexcept;
+    const ContactProblem<fixed_point::Q16_16, 16>&,
+    const ContactForces<fixed_point::Q16_16, 16>&) noexcept;
 template LocalContactSolution<fixed_point::Q16_16> solve_local_contact<fixed_point::Q16_16>(
-    const ContactBlock3<fixed_point::Q16_16>&, const ContactVec3<fixed_point::Q16_16>&, fixed_point::Q16_16,
-    std::size_t, bool, const ContactVec3<fixed_point::Q16_16>*) noexcept;
+    const ContactBlock3<fixed_point::Q16_16>&, const ContactVec3<fixed_point::Q16_16>&,
+    fixed_point::Q16_16, std::size_t, bool, const ContactVec3<fixed_point::Q16_16>*) noexcept;
 
 }  // namespace scopekin::contact

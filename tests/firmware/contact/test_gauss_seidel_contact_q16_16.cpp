@@ -58,9 +58,13 @@ Q16_16 to_q(double x) {
     return Q16_16::from_raw(static_cast<std::int32_t>(scaled));
 }
 
-double to_d(Q16_16 x) { return static_cast<double>(x.raw()) / 65536.0; }
+double to_d(Q16_16 x) {
+    return static_cast<double>(x.raw()) / 65536.0;
+}
 
-Q16_16 raw(std::int32_t r) { return Q16_16::from_raw(r); }
+Q16_16 raw(std::int32_t r) {
+    return Q16_16::from_raw(r);
+}
 
 bool within_lsb(Q16_16 actual, std::int32_t expected_raw, std::int32_t lsb) {
     const std::int64_t diff = std::int64_t{actual.raw()} - expected_raw;
@@ -84,7 +88,9 @@ void report_millionths(const char* label, double value, const char* unit) {
 #endif
 }
 
-void report(const char* label, double value_n) { report_millionths(label, value_n, "uN"); }
+void report(const char* label, double value_n) {
+    report_millionths(label, value_n, "uN");
+}
 
 void report_count(const char* label, std::size_t count) {
 #if defined(SCOPEKIN_PORTABLE_CHECK_GTEST)
@@ -303,7 +309,9 @@ struct Comparison {
     std::size_t solves{0};
 };
 
-void raise_to(double& maximum, double value) { maximum = value > maximum ? value : maximum; }
+void raise_to(double& maximum, double value) {
+    maximum = value > maximum ? value : maximum;
+}
 
 constexpr double force_bound_n = 0.01;  // the target: Q16_16 within 0.01 N of double
 /// Contact forces the firmware expects (RANGES.md: up to ~50 N); the random SPD problems reach
@@ -402,8 +410,9 @@ SCOPEKIN_TEST(GaussSeidelContactQ16, SingleContactStickSlipSeparation) {
     problem_q = ProblemQ{};
     forces_q = ForcesQ{};
     problem_q.contact_count = 1;
-    problem_q.block(0, 0) = {Q16_16::from_int(2), Q16_16{}, Q16_16{}, Q16_16{}, raw(32768),
-                             Q16_16{}, Q16_16{}, Q16_16{}, raw(32768)};
+    problem_q.block(0, 0) = {Q16_16::from_int(2), Q16_16{}, Q16_16{}, Q16_16{},
+                             raw(32768),          Q16_16{}, Q16_16{}, Q16_16{},
+                             raw(32768)};
     problem_q.friction[0] = raw(32768);
     const auto settings = firmware_settings_q(4, 4);
     // Stick: d = (-1, 0.0625, -0.03125) mm: f = -W^-1 d = (0.5, -0.125, 0.0625) N exactly
@@ -439,8 +448,15 @@ SCOPEKIN_TEST(GaussSeidelContactQ16, AnisotropicBlockSlipsOnTheCone) {
     problem_q = ProblemQ{};
     forces_q = ForcesQ{};
     problem_q.contact_count = 1;
-    problem_q.block(0, 0) = {Q16_16::from_int(2000), Q16_16{}, Q16_16{}, Q16_16{}, raw(32768),
-                             Q16_16{}, Q16_16{}, Q16_16{}, Q16_16::from_int(2000)};
+    problem_q.block(0, 0) = {Q16_16::from_int(2000),
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             raw(32768),
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16::from_int(2000)};
     problem_q.friction[0] = raw(81920);
     problem_q.free_displacement[0] = {Q16_16::from_int(-10), Q16_16::from_int(5), Q16_16{}};
     const auto r = sc::solve_contacts(problem_q, firmware_settings_q(3, 4), forces_q);
@@ -474,13 +490,21 @@ SCOPEKIN_TEST(GaussSeidelContactQ16, TinyFrictionIsFrictionlessAndDegenerateIsIg
     problem_q.contact_count = 2;
     // Contact 0: W = I, d = (-0.25, 1, 0), mu = 1 LSB: mu c = 0.25 LSB rounds to 0 -> frictionless
     // slip, f = (0.25, 0, 0).
-    problem_q.block(0, 0) = {Q16_16::from_int(1), Q16_16{}, Q16_16{}, Q16_16{}, Q16_16::from_int(1),
-                             Q16_16{}, Q16_16{}, Q16_16{}, Q16_16::from_int(1)};
+    problem_q.block(0, 0) = {Q16_16::from_int(1), Q16_16{}, Q16_16{}, Q16_16{},
+                             Q16_16::from_int(1), Q16_16{}, Q16_16{}, Q16_16{},
+                             Q16_16::from_int(1)};
     problem_q.free_displacement[0] = {raw(-16384), Q16_16::from_int(1), Q16_16{}};
     problem_q.friction[0] = raw(1);
     // Contact 1: tangential block singular (W_tt = W_ss = 0): degenerate, f = 0.
-    problem_q.block(1, 1) = {Q16_16::from_int(1), Q16_16{}, Q16_16{}, Q16_16{}, Q16_16{},
-                             Q16_16{}, Q16_16{}, Q16_16{}, Q16_16{}};
+    problem_q.block(1, 1) = {Q16_16::from_int(1),
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{},
+                             Q16_16{}};
     problem_q.free_displacement[1] = {Q16_16::from_int(-1), Q16_16{}, Q16_16{}};
     problem_q.friction[1] = raw(16384);
     const auto r = sc::solve_contacts(problem_q, firmware_settings_q(2, 4), forces_q);
@@ -615,8 +639,11 @@ SCOPEKIN_TEST(GaussSeidelContactQ16, SaturatedInputsGiveProjectedForces) {
     // preset) and return forces on the cone: f_n >= 0, |f_T| <= mu f_n (up to rounding).
     Rng rng{0xBADF00DULL};
     constexpr std::array<std::int32_t, 6> extremes{std::numeric_limits<std::int32_t>::min(),
-                                                    std::numeric_limits<std::int32_t>::max(),
-                                                    -1, 1, 0, 65536};
+                                                   std::numeric_limits<std::int32_t>::max(),
+                                                   -1,
+                                                   1,
+                                                   0,
+                                                   65536};
     for (int trial = 0; trial < 20; ++trial) {
         problem_q = ProblemQ{};
         forces_q = ForcesQ{};
@@ -627,7 +654,8 @@ SCOPEKIN_TEST(GaussSeidelContactQ16, SaturatedInputsGiveProjectedForces) {
                 const auto bits =
                     static_cast<std::int32_t>(static_cast<std::uint32_t>(pick >> 32U));
                 problem_q.delassus_entry(i, k) =
-                    (pick & 3U) == 0U ? raw(extremes[static_cast<std::size_t>((pick >> 8U) % 6U)]) : raw(bits);
+                    (pick & 3U) == 0U ? raw(extremes[static_cast<std::size_t>((pick >> 8U) % 6U)])
+                                      : raw(bits);
             }
         }
         for (std::size_t a = 0; a < 4U; ++a) {

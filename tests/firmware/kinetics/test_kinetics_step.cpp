@@ -26,16 +26,20 @@ kin::Inputs sample(int insertion_mm, std::uint8_t fresh = kin::kAllInputSignals)
 /// Advances from 20 mm to `depth_mm` at 1 mm per step (200 mm/s) and returns the last outputs.
 void advance_to(int depth_mm) {
     kin::init(kin::default_config(), g_state);
-    for (int d = 20; d <= depth_mm; ++d) kin::step(sample(d), g_state, g_out);
+    for (int d = 20; d <= depth_mm; ++d)
+        kin::step(sample(d), g_state, g_out);
 }
 
-bool has(std::uint32_t flags, std::uint32_t bit) { return (flags & bit) != 0U; }
+bool has(std::uint32_t flags, std::uint32_t bit) {
+    return (flags & bit) != 0U;
+}
 
 }  // namespace
 
 SCOPEKIN_TEST(ReducedTables, DefaultTablesPassShapeGridAndChecksum) {
     const kin::ReducedTablesQ16& t = kin::default_reduced_tables();
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&t, kin::kStationCapacity) == kin::ReducedTablesFault::none);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&t, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::none);
     SCOPEKIN_EXPECT_EQ(t.head.stations, std::size_t{12});
     SCOPEKIN_EXPECT_EQ(t.head.segments[0].key_step.raw(), Q16_16::from_int(1).raw());  // 1 mm knots
     SCOPEKIN_EXPECT_EQ(t.head.segments[0].direction, 1);
@@ -43,25 +47,31 @@ SCOPEKIN_TEST(ReducedTables, DefaultTablesPassShapeGridAndChecksum) {
 
 SCOPEKIN_TEST(ReducedTables, DamagedOrMismatchedTablesAreRefused) {
     const kin::ReducedTablesQ16& good = kin::default_reduced_tables();
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(nullptr, kin::kStationCapacity) == kin::ReducedTablesFault::missing);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(nullptr, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::missing);
     kin::ReducedTablesQ16 wrong_checksum = good;
     wrong_checksum.checksum ^= 1U;
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&wrong_checksum, kin::kStationCapacity) ==
                          kin::ReducedTablesFault::checksum_mismatch);
     kin::ReducedTablesQ16 truncated = good;
     truncated.knot_value_count -= 1U;
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&truncated, kin::kStationCapacity) == kin::ReducedTablesFault::bad_shape);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&truncated, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_shape);
     // A table set for more stations than the firmware's capacity.
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&good, 11U) == kin::ReducedTablesFault::bad_shape);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&good, 11U) ==
+                         kin::ReducedTablesFault::bad_shape);
     kin::ReducedTablesQ16 bad_step = good;
     bad_step.head.segments[0].key_step = Q16_16{};
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&bad_step, kin::kStationCapacity) == kin::ReducedTablesFault::bad_grid);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&bad_step, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_grid);
     kin::ReducedTablesQ16 withdraw_first = good;
     withdraw_first.head.segments[0].direction = -1;
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&withdraw_first, kin::kStationCapacity) == kin::ReducedTablesFault::bad_grid);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&withdraw_first, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_grid);
     kin::ReducedTablesQ16 overlapping = good;
     overlapping.head.segments[1].first_knot -= 1U;
-    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&overlapping, kin::kStationCapacity) == kin::ReducedTablesFault::bad_shape);
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&overlapping, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_shape);
 }
 
 SCOPEKIN_TEST(KineticsStep, WithoutTablesEveryStepReportsTheConfigFaultAndNoEstimate) {
@@ -114,7 +124,9 @@ SCOPEKIN_TEST(KineticsStep, OneMetreJumpIsRateLimitedFlaggedAndRecovered) {
     SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionJump));
     // The depth moved by at most 1000 mm/s * 5 ms = 5 mm, so the tip by little more.
     SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm - tip <= Q16_16::from_int(6));
-    SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), (Q16_16::from_int(200) + Q16_16::from_int(1000) * Q16_16::from_ratio(1, 200)).raw());
+    SCOPEKIN_EXPECT_EQ(
+        g_state.insertion_mm.raw(),
+        (Q16_16::from_int(200) + Q16_16::from_int(1000) * Q16_16::from_ratio(1, 200)).raw());
     kin::step(sample(200), g_state, g_out);  // the glitch is gone: back within one limit
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
     SCOPEKIN_EXPECT_EQ(g_state.insertion_mm.raw(), Q16_16::from_int(200).raw());
@@ -150,18 +162,21 @@ SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
     SCOPEKIN_EXPECT_EQ(head.segments[2].direction, -1);
     advance_to(680);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
-    for (int i = 0; i < 100; ++i) kin::step(sample(680), g_state, g_out);  // 0.5 s held still
+    for (int i = 0; i < 100; ++i)
+        kin::step(sample(680), g_state, g_out);  // 0.5 s held still
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{1});
     SCOPEKIN_EXPECT_EQ(g_state.model.hold_steps, std::uint32_t{100});
     // The first move after the hold sets the direction at once: withdrawing, the withdrawal run.
     kin::step(sample(679), g_state, g_out);
     SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{2});
-    for (int d = 678; d >= 600; --d) kin::step(sample(d), g_state, g_out);
+    for (int d = 678; d >= 600; --d)
+        kin::step(sample(d), g_state, g_out);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{2});
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
     // Below the withdrawal run's depths: back to segment 0, still withdrawing.
-    for (int d = 599; d >= 500; --d) kin::step(sample(d), g_state, g_out);
+    for (int d = 599; d >= 500; --d)
+        kin::step(sample(d), g_state, g_out);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
     SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});

@@ -17,9 +17,13 @@ using Efficiency = AdvanceEfficiency<>;
 
 constexpr std::int32_t kEighthRaw = 8192;  // 0.125 mm
 
-constexpr Q16_16 raw(std::int32_t r) { return Q16_16::from_raw(r); }
+constexpr Q16_16 raw(std::int32_t r) {
+    return Q16_16::from_raw(r);
+}
 /// Handle (or a 1:1 tip) after `step` steps at 0.125 mm/step.
-constexpr Q16_16 at_25mm_per_s(std::int32_t step) { return raw(kEighthRaw * step); }
+constexpr Q16_16 at_25mm_per_s(std::int32_t step) {
+    return raw(kEighthRaw * step);
+}
 
 static_assert(Efficiency::valid(Efficiency::Config{}), "the defaults are a valid config");
 static_assert(Efficiency::capacity == 64);
@@ -51,7 +55,7 @@ SCOPEKIN_TEST(AdvanceEfficiency, RampPairAtThreeTenthsGivesThreeTenths) {
             SCOPEKIN_EXPECT_EQ(out.handle_advance_mm.raw(), 0);
         } else {
             SCOPEKIN_EXPECT_TRUE(out.defined);
-            SCOPEKIN_EXPECT_EQ(out.handle_advance_mm.raw(), 50 * kEighthRaw);  // 6.25 mm
+            SCOPEKIN_EXPECT_EQ(out.handle_advance_mm.raw(), 50 * kEighthRaw);       // 6.25 mm
             SCOPEKIN_EXPECT_TRUE(lsb_apart(out.tip_advance_mm, raw(122880)) <= 1);  // 1.875 mm
             SCOPEKIN_EXPECT_TRUE(lsb_apart(out.efficiency, three_tenths) <= 1);
             SCOPEKIN_EXPECT_TRUE(!out.clamped);

@@ -13,10 +13,16 @@ using scopekin::fixed_point::Q16_16;
 using scopekin::monitors::ContactForceLevel;
 using scopekin::monitors::ContactForceMonitor;
 
-constexpr Q16_16 raw(std::int32_t r) { return Q16_16::from_raw(r); }
-constexpr Q16_16 newtons(std::int32_t n) { return Q16_16::from_int(n); }
+constexpr Q16_16 raw(std::int32_t r) {
+    return Q16_16::from_raw(r);
+}
+constexpr Q16_16 newtons(std::int32_t n) {
+    return Q16_16::from_int(n);
+}
 
-bool is(ContactForceMonitor::Outputs out, ContactForceLevel level) { return out.level == level; }
+bool is(ContactForceMonitor::Outputs out, ContactForceLevel level) {
+    return out.level == level;
+}
 
 }  // namespace
 
@@ -91,7 +97,8 @@ SCOPEKIN_TEST(ContactForceMonitor, AbsurdInputsSetTheFlagAndHoldTheLevel) {
     for (const Q16_16 f : absurd) {  // bound: 5
         const auto out = monitor.step(f);
         SCOPEKIN_EXPECT_TRUE(out.input_fault);
-        SCOPEKIN_EXPECT_TRUE(out.level == ContactForceLevel::warning);  // neither raised nor cleared
+        SCOPEKIN_EXPECT_TRUE(out.level ==
+                             ContactForceLevel::warning);  // neither raised nor cleared
     }
     const auto ok = monitor.step(newtons(1000));  // the limit itself is valid
     SCOPEKIN_EXPECT_TRUE(!ok.input_fault && ok.level == ContactForceLevel::critical);
@@ -137,7 +144,8 @@ SCOPEKIN_TEST(ContactForceMonitor, InvalidConfigFallsBackToDefaults) {
     SCOPEKIN_EXPECT_TRUE(monitor.init(custom));
     SCOPEKIN_EXPECT_TRUE(!monitor.config_fault());
     SCOPEKIN_EXPECT_TRUE(is(monitor.step(newtons(8)), ContactForceLevel::critical));
-    SCOPEKIN_EXPECT_TRUE(is(monitor.step(newtons(4)), ContactForceLevel::critical));  // 4 N: not < 4
+    SCOPEKIN_EXPECT_TRUE(
+        is(monitor.step(newtons(4)), ContactForceLevel::critical));  // 4 N: not < 4
     SCOPEKIN_EXPECT_TRUE(is(monitor.step(raw(262143)), ContactForceLevel::warning));  // >= 2.5 N
-    SCOPEKIN_EXPECT_TRUE(is(monitor.step(raw(163839)), ContactForceLevel::normal));  // < 2.5 N
+    SCOPEKIN_EXPECT_TRUE(is(monitor.step(raw(163839)), ContactForceLevel::normal));   // < 2.5 N
 }

@@ -22,7 +22,9 @@ using scopekin::monitors::SelfLockMonitor;
 using scopekin::monitors::StickCriterion;
 using scopekin::monitors::StickState;
 
-constexpr Q16_16 raw(std::int32_t r) { return Q16_16::from_raw(r); }
+constexpr Q16_16 raw(std::int32_t r) {
+    return Q16_16::from_raw(r);
+}
 constexpr Q16_16 kOne = Q16_16::from_int(1);
 constexpr std::int32_t kEighthRaw = 8192;  // 0.125 mm per step = 25 mm/s
 
@@ -166,7 +168,8 @@ SCOPEKIN_TEST(SelfLockMonitor, ClearsOnlyAfterTOffAndAHighEfficiency) {
     monitor.init(SelfLockMonitor::Config{});
     const Q16_16 low = Q16_16::from_ratio(3, 10);
     const Q16_16 good = Q16_16::from_ratio(8, 10);
-    for (int i = 0; i < 20; ++i) monitor.step(inputs(1, true, low, true));
+    for (int i = 0; i < 20; ++i)
+        monitor.step(inputs(1, true, low, true));
     SCOPEKIN_EXPECT_TRUE(monitor.alarm());
     // Confirmed: alarm and defined efficiency < 0.5.
     SCOPEKIN_EXPECT_TRUE(monitor.step(inputs(1, true, low, true)).confirmed);
@@ -179,16 +182,19 @@ SCOPEKIN_TEST(SelfLockMonitor, ClearsOnlyAfterTOffAndAHighEfficiency) {
     }
 
     // Again, but C comes back at the 99th step: the off count restarts.
-    for (int i = 0; i < 20; ++i) monitor.step(inputs(1, true, low, true));
+    for (int i = 0; i < 20; ++i)
+        monitor.step(inputs(1, true, low, true));
     SCOPEKIN_EXPECT_TRUE(monitor.alarm());
-    for (int i = 0; i < 99; ++i) monitor.step(inputs(0, true, good, true));
+    for (int i = 0; i < 99; ++i)
+        monitor.step(inputs(0, true, good, true));
     SCOPEKIN_EXPECT_TRUE(monitor.step(inputs(1, true, good, true)).alarm);
     for (int i = 1; i <= 100; ++i) {
         SCOPEKIN_EXPECT_EQ(monitor.step(inputs(0, true, good, true)).alarm, i < 100);
     }
 
     // T_off elapsed but the efficiency stays low (0.6 < 0.7): the alarm stays.
-    for (int i = 0; i < 20; ++i) monitor.step(inputs(1, true, low, true));
+    for (int i = 0; i < 20; ++i)
+        monitor.step(inputs(1, true, low, true));
     for (int i = 0; i < 500; ++i) {
         SCOPEKIN_EXPECT_TRUE(monitor.step(inputs(0, true, Q16_16::from_ratio(6, 10), true)).alarm);
     }
@@ -199,11 +205,13 @@ SCOPEKIN_TEST(SelfLockMonitor, ClearsOnlyAfterTOffAndAHighEfficiency) {
 SCOPEKIN_TEST(SelfLockMonitor, HoldAfterAnAlarmLatchesUntilTheTipFollows) {
     SelfLockMonitor monitor;
     monitor.init(SelfLockMonitor::Config{});
-    for (int i = 0; i < 20; ++i) monitor.step(inputs(1, true, Q16_16::from_ratio(3, 10), true));
+    for (int i = 0; i < 20; ++i)
+        monitor.step(inputs(1, true, Q16_16::from_ratio(3, 10), true));
     SCOPEKIN_EXPECT_TRUE(monitor.alarm());
     // Hold: not advancing, efficiency undefined.  Even a held value above 0.7 does not clear.
     for (int i = 0; i < 1000; ++i) {
-        SCOPEKIN_EXPECT_TRUE(monitor.step(inputs(3, false, Q16_16::from_ratio(9, 10), false)).alarm);
+        SCOPEKIN_EXPECT_TRUE(
+            monitor.step(inputs(3, false, Q16_16::from_ratio(9, 10), false)).alarm);
     }
     // Advancing with slip and a good, defined efficiency: T_off already elapsed, clears at once.
     SCOPEKIN_EXPECT_TRUE(!monitor.step(inputs(0, true, Q16_16::from_ratio(9, 10), true)).alarm);
@@ -212,7 +220,8 @@ SCOPEKIN_TEST(SelfLockMonitor, HoldAfterAnAlarmLatchesUntilTheTipFollows) {
 SCOPEKIN_TEST(SelfLockMonitor, AbsurdInputsHoldTheState) {
     SelfLockMonitor monitor;
     monitor.init(SelfLockMonitor::Config{});
-    for (int i = 0; i < 10; ++i) monitor.step(inputs(1, true, kOne, true));
+    for (int i = 0; i < 10; ++i)
+        monitor.step(inputs(1, true, kOne, true));
     // 4 distal stations in stick (> max_distal_stations = 3) and an efficiency of 3 (outside
     // [-2, 2]) are absurd: fault flag, counters held.
     auto out = monitor.step(inputs(4, true, kOne, true));

@@ -93,7 +93,8 @@ SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {
     status.period_overruns = 17;
     status.tracker_faults = 0x81;
     protocol::BoxStatus status_back{};
-    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(status), status_back) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(status), status_back) ==
+                         protocol::DecodeResult::ok);
     SCOPEKIN_EXPECT_EQ(status_back.heartbeat, 200);
     SCOPEKIN_EXPECT_TRUE(status_back.state == protocol::BoxState::degraded);
     SCOPEKIN_EXPECT_TRUE(status_back.can_state == protocol::CanState::bus_off);
@@ -111,11 +112,14 @@ SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {
     summary.sticking_mask = 0xA05;
     summary.step_counter = 255;
     protocol::ContactSummary summary_back{};
-    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(summary), summary_back) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(summary), summary_back) ==
+                         protocol::DecodeResult::ok);
     // 0.001 N and 0.1 mm steps: the Q16.16 values come back within half a step.
-    const std::int32_t force_error = summary_back.max_contact_force_N.raw() - summary.max_contact_force_N.raw();
+    const std::int32_t force_error =
+        summary_back.max_contact_force_N.raw() - summary.max_contact_force_N.raw();
     SCOPEKIN_EXPECT_TRUE(force_error <= 33 && force_error >= -33);
-    const std::int32_t path_error = summary_back.max_contact_path_mm.raw() - summary.max_contact_path_mm.raw();
+    const std::int32_t path_error =
+        summary_back.max_contact_path_mm.raw() - summary.max_contact_path_mm.raw();
     SCOPEKIN_EXPECT_TRUE(path_error <= 3277 && path_error >= -3277);
     SCOPEKIN_EXPECT_EQ(summary_back.max_contact_station, 11);
     SCOPEKIN_EXPECT_EQ(summary_back.active_stations, 12);
@@ -124,7 +128,8 @@ SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {
 
     protocol::BoxCounter counter{protocol::BoxCounterIndex::counter_gaps, 0xDEADBEEFU};
     protocol::BoxCounter counter_back{};
-    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(counter), counter_back) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(counter), counter_back) ==
+                         protocol::DecodeResult::ok);
     SCOPEKIN_EXPECT_TRUE(counter_back.index == protocol::BoxCounterIndex::counter_gaps);
     SCOPEKIN_EXPECT_EQ(counter_back.value, 0xDEADBEEFU);
 
@@ -136,7 +141,8 @@ SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {
     station.path_mm = Q16_16::from_int(600);
     station.arc_from_tip_mm = Q16_16::from_int(200);
     protocol::StationForces station_back{};
-    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(station), station_back) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(station), station_back) ==
+                         protocol::DecodeResult::ok);
     SCOPEKIN_EXPECT_EQ(station_back.station, 4);
     SCOPEKIN_EXPECT_EQ(station_back.state, 2);
     SCOPEKIN_EXPECT_EQ(station_back.normal_force_N.raw(), Q16_16::from_int(3).raw());

@@ -12,7 +12,8 @@ namespace {
 namespace hal = scopekin::hal;
 using hal::CandumpParse;
 
-std::string_view format(const hal::CandumpRecord& record, std::array<char, hal::kCandumpLineCapacity>& buffer) {
+std::string_view format(const hal::CandumpRecord& record,
+                        std::array<char, hal::kCandumpLineCapacity>& buffer) {
     const std::size_t length = hal::format_candump_line(record, buffer);
     return std::string_view{buffer.data(), length};
 }
@@ -21,7 +22,8 @@ std::string_view format(const hal::CandumpRecord& record, std::array<char, hal::
 
 SCOPEKIN_TEST(CandumpLog, ParsesTheFormatsCandumpWrites) {
     hal::CandumpRecord record{};
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1700000000.123456) vcan0 110#C40918FC0009\n", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1700000000.123456) vcan0 110#C40918FC0009\n",
+                                                 record) == CandumpParse::ok);
     SCOPEKIN_EXPECT_EQ(record.timestamp_us, 1700000000123456ULL);
     SCOPEKIN_EXPECT_TRUE(std::strcmp(record.interface.data(), "vcan0") == 0);
     SCOPEKIN_EXPECT_EQ(record.frame.id, 0x110U);
@@ -30,25 +32,31 @@ SCOPEKIN_TEST(CandumpLog, ParsesTheFormatsCandumpWrites) {
     SCOPEKIN_EXPECT_EQ(record.frame.data[0], 0xC4);
     SCOPEKIN_EXPECT_EQ(record.frame.data[5], 0x09);
 
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(0.000001) can1 12345678#DEADBEEF", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(0.000001) can1 12345678#DEADBEEF", record) ==
+                         CandumpParse::ok);
     SCOPEKIN_EXPECT_TRUE(record.frame.extended);
     SCOPEKIN_EXPECT_EQ(record.frame.id, 0x12345678U);
     SCOPEKIN_EXPECT_EQ(record.frame.length, 4);
 
     // An 8-digit id with bit 29 (CAN_ERR_FLAG) is an error frame; the rest are its classes.
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 20000040#0000000000000000\r\n", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 20000040#0000000000000000\r\n",
+                                                 record) == CandumpParse::ok);
     SCOPEKIN_EXPECT_TRUE(record.frame.error);
     SCOPEKIN_EXPECT_EQ(record.frame.id, static_cast<std::uint32_t>(hal::kCanErrorBusOff));
     SCOPEKIN_EXPECT_EQ(record.frame.length, 8);
 
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#R", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#R", record) ==
+                         CandumpParse::ok);
     SCOPEKIN_EXPECT_TRUE(record.frame.remote);
     SCOPEKIN_EXPECT_EQ(record.frame.length, 0);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#R4", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#R4", record) ==
+                         CandumpParse::ok);
     SCOPEKIN_EXPECT_EQ(record.frame.length, 4);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#", record) ==
+                         CandumpParse::ok);
     SCOPEKIN_EXPECT_EQ(record.frame.length, 0);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#11.22.33", record) == CandumpParse::ok);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(2.500000) vcan0 123#11.22.33", record) ==
+                         CandumpParse::ok);
     SCOPEKIN_EXPECT_EQ(record.frame.length, 3);
     SCOPEKIN_EXPECT_EQ(record.frame.data[2], 0x33);
 }
@@ -57,20 +65,34 @@ SCOPEKIN_TEST(CandumpLog, RefusesWithAReason) {
     hal::CandumpRecord record{};
     record.frame.id = 0x42;  // untouched by a refused line
     SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("   \n", record) == CandumpParse::blank);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("1.000000 vcan0 123#00", record) == CandumpParse::bad_timestamp);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.0001) vcan0 123#00", record) == CandumpParse::bad_timestamp);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000 vcan0 123#00", record) == CandumpParse::bad_timestamp);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000)", record) == CandumpParse::bad_interface);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) averyveryverylongname 123#00", record) == CandumpParse::bad_interface);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 1234#00", record) == CandumpParse::bad_identifier);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 800#00", record) == CandumpParse::bad_identifier);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123456789#00", record) == CandumpParse::bad_identifier);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123 00", record) == CandumpParse::bad_identifier);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#0", record) == CandumpParse::bad_data);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#0G", record) == CandumpParse::bad_data);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#001122334455667788", record) == CandumpParse::bad_data);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123##10011", record) == CandumpParse::fd_unsupported);
-    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#00 extra", record) == CandumpParse::trailing_garbage);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("1.000000 vcan0 123#00", record) ==
+                         CandumpParse::bad_timestamp);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.0001) vcan0 123#00", record) ==
+                         CandumpParse::bad_timestamp);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000 vcan0 123#00", record) ==
+                         CandumpParse::bad_timestamp);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000)", record) ==
+                         CandumpParse::bad_interface);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) averyveryverylongname 123#00",
+                                                 record) == CandumpParse::bad_interface);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 1234#00", record) ==
+                         CandumpParse::bad_identifier);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 800#00", record) ==
+                         CandumpParse::bad_identifier);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123456789#00", record) ==
+                         CandumpParse::bad_identifier);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123 00", record) ==
+                         CandumpParse::bad_identifier);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#0", record) ==
+                         CandumpParse::bad_data);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#0G", record) ==
+                         CandumpParse::bad_data);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#001122334455667788",
+                                                 record) == CandumpParse::bad_data);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123##10011", record) ==
+                         CandumpParse::fd_unsupported);
+    SCOPEKIN_EXPECT_TRUE(hal::parse_candump_line("(1.000000) vcan0 123#00 extra", record) ==
+                         CandumpParse::trailing_garbage);
     SCOPEKIN_EXPECT_EQ(record.frame.id, 0x42U);
     SCOPEKIN_EXPECT_TRUE(std::strlen(hal::describe(CandumpParse::bad_data)) > 10U);
 }

@@ -24,7 +24,8 @@ ReceivedCanFrame force_frame(std::int32_t force_N, std::uint8_t counter, std::ui
     return ReceivedCanFrame{protocol::encode(message), time_us};
 }
 
-ReceivedCanFrame insertion_frame(std::int32_t insertion_mm, std::uint8_t counter, std::uint64_t time_us) {
+ReceivedCanFrame insertion_frame(std::int32_t insertion_mm, std::uint8_t counter,
+                                 std::uint64_t time_us) {
     protocol::InsertionRoll message{};
     message.insertion_mm = Q16_16::from_int(insertion_mm);
     message.counter = counter;
@@ -40,7 +41,8 @@ SCOPEKIN_TEST(HandleSensors, ValidSamplesAreFreshOncePerPeriod) {
     SCOPEKIN_EXPECT_TRUE(sensors.accept(insertion_frame(250, 7, 2000)));
     messages::HandleSamples samples = sensors.take_samples(5000);
     SCOPEKIN_EXPECT_TRUE(samples.force_torque_fresh && samples.insertion_roll_fresh);
-    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(), Q16_16::from_int(4).raw());  // the latest
+    SCOPEKIN_EXPECT_EQ(samples.force_torque.force_N.raw(),
+                       Q16_16::from_int(4).raw());                    // the latest
     SCOPEKIN_EXPECT_EQ(samples.force_torque.receive_time_us, 2000U);  // ... with its receive time
     SCOPEKIN_EXPECT_EQ(samples.insertion_roll.insertion_mm.raw(), Q16_16::from_int(250).raw());
     SCOPEKIN_EXPECT_EQ(samples.insertion_roll.receive_time_us, 2000U);
@@ -57,7 +59,8 @@ SCOPEKIN_TEST(HandleSensors, StaleAfterTheTimeoutAndRecovers) {
     drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000}};
     // Never seen: stale from the start.
     (void)sensors.take_samples(1000);
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultForceTorqueStale | messages::kBoxFaultEncoderStale);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(),
+                       messages::kBoxFaultForceTorqueStale | messages::kBoxFaultEncoderStale);
     (void)sensors.accept(force_frame(1, 0, 2000));
     (void)sensors.accept(insertion_frame(100, 0, 2000));
     (void)sensors.take_samples(5000);
@@ -100,8 +103,9 @@ SCOPEKIN_TEST(HandleSensors, FaultsAreCountedAndTheHeldSampleKept) {
     SCOPEKIN_EXPECT_EQ(sensors.counters().bad_length, 1U);
     SCOPEKIN_EXPECT_EQ(sensors.counters().sensor_status, 1U);
     SCOPEKIN_EXPECT_EQ(sensors.counters().force_torque_samples, 2U);
-    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultCounterGap | messages::kBoxFaultBadLength |
-                                             messages::kBoxFaultSensorStatus | messages::kBoxFaultEncoderStale);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(),
+                       messages::kBoxFaultCounterGap | messages::kBoxFaultBadLength |
+                           messages::kBoxFaultSensorStatus | messages::kBoxFaultEncoderStale);
     // The flags belong to the period they happened in.
     (void)sensors.accept(force_frame(7, 5, 6000));
     (void)sensors.take_samples(10000);

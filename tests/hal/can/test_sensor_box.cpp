@@ -92,16 +92,19 @@ struct Bench {
             switch (received.frame.id) {
                 case protocol::kKineticEstimateId:
                     ++out.estimates;
-                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.estimate) == protocol::DecodeResult::ok);
+                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.estimate) ==
+                                         protocol::DecodeResult::ok);
                     break;
                 case protocol::kContactSummaryId: ++out.summaries; break;
                 case protocol::kAlarmsId:
                     ++out.alarms;
-                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.alarm) == protocol::DecodeResult::ok);
+                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.alarm) ==
+                                         protocol::DecodeResult::ok);
                     break;
                 case protocol::kBoxStatusId:
                     ++out.statuses;
-                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.status) == protocol::DecodeResult::ok);
+                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.status) ==
+                                         protocol::DecodeResult::ok);
                     break;
                 case protocol::kBoxCountersId: ++out.counters; break;
                 case protocol::kStationForcesId: ++out.stations; break;
@@ -127,7 +130,8 @@ void tracker_sends(const Message& message, Encode encode) {
     std::array<std::uint8_t, scopekin::protocol::kEmTrackerMaxFrameSize> bytes{};
     const std::size_t size = encode(message, bytes);
     SCOPEKIN_EXPECT_TRUE(size > 0U);
-    SCOPEKIN_EXPECT_EQ(tracker_line.device_write(std::span<const std::uint8_t>{bytes.data(), size}), size);
+    SCOPEKIN_EXPECT_EQ(tracker_line.device_write(std::span<const std::uint8_t>{bytes.data(), size}),
+                       size);
 }
 
 }  // namespace
@@ -174,7 +178,8 @@ SCOPEKIN_TEST(SensorBox, ASensorThatStopsIsFlaggedWithinThreePeriodsAndRecovers)
     bool flagged = false;
     for (int k = 1; k <= 3 && !flagged; ++k) {
         const Published out = bench.period();
-        if (out.statuses > 0 && (out.status.kinetic_faults & scopekin::kinetics::kFaultInsertionStale) != 0U) {
+        if (out.statuses > 0 &&
+            (out.status.kinetic_faults & scopekin::kinetics::kFaultInsertionStale) != 0U) {
             flagged = true;
             periods_to_fault = k;
             SCOPEKIN_EXPECT_TRUE(out.status.state == protocol::BoxState::degraded);
@@ -198,7 +203,8 @@ SCOPEKIN_TEST(SensorBox, ASensorThatStopsIsFlaggedWithinThreePeriodsAndRecovers)
     bool cleared = false;
     for (int k = 1; k <= 3 && !cleared; ++k) {
         out = bench.period();
-        cleared = out.statuses > 0 && out.status.kinetic_faults == 0U && out.status.driver_faults == 0U;
+        cleared =
+            out.statuses > 0 && out.status.kinetic_faults == 0U && out.status.driver_faults == 0U;
     }
     SCOPEKIN_EXPECT_TRUE(cleared);
     SCOPEKIN_EXPECT_TRUE(!out.estimate.inputs_stale);
@@ -267,9 +273,11 @@ SCOPEKIN_TEST(SensorBox, GarbageChangesNothingButCounters) {
             hal::CanFrame frame{};
             const std::uint32_t kind = next() % 4U;
             frame.length = static_cast<std::uint8_t>(next() % 9U);
-            for (auto& byte : frame.data) byte = static_cast<std::uint8_t>(next());
+            for (auto& byte : frame.data)
+                byte = static_cast<std::uint8_t>(next());
             if (kind == 0U) {  // an input id with a wrong length
-                frame.id = (next() % 2U) == 0U ? protocol::kHandleForceTorqueId : protocol::kInsertionRollId;
+                frame.id = (next() % 2U) == 0U ? protocol::kHandleForceTorqueId
+                                               : protocol::kInsertionRollId;
                 frame.length = frame.id == protocol::kHandleForceTorqueId ? 8 : 2;
                 ++garbage_bad_length;
             } else if (kind == 1U) {  // an id nobody uses
@@ -302,7 +310,8 @@ SCOPEKIN_TEST(SensorBox, GarbageChangesNothingButCounters) {
     SCOPEKIN_EXPECT_EQ(noisy.box.counters().unknown_ids, garbage_unknown);
     SCOPEKIN_EXPECT_EQ(noisy.box.handle_sensors().counters().bad_length, garbage_bad_length);
     SCOPEKIN_EXPECT_EQ(noisy.box.handle_sensors().counters().counter_gaps, 0U);
-    SCOPEKIN_EXPECT_TRUE((noisy.box.box_faults() & (messages::kBoxFaultUnknownId | messages::kBoxFaultBadLength)) != 0U);
+    SCOPEKIN_EXPECT_TRUE((noisy.box.box_faults() &
+                          (messages::kBoxFaultUnknownId | messages::kBoxFaultBadLength)) != 0U);
 }
 
 SCOPEKIN_TEST(SensorBox, TrackerSamplesReachTheEstimatorInput) {
@@ -329,16 +338,19 @@ SCOPEKIN_TEST(SensorBox, TrackerSamplesReachTheEstimatorInput) {
     constexpr std::uint8_t kSent = messages::kEmSourceSigmoid | messages::kEmSourceTipForce;
     SCOPEKIN_EXPECT_EQ(tracker.fresh_mask, kSent);
     SCOPEKIN_EXPECT_EQ(tracker.valid_mask, kSent);
-    SCOPEKIN_EXPECT_EQ(tracker.pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());  // 12.5 mm
+    SCOPEKIN_EXPECT_EQ(tracker.pose[3].position_mm[0].raw(),
+                       Q16_16::from_ratio(25, 2).raw());  // 12.5 mm
     SCOPEKIN_EXPECT_EQ(tracker.pose[3].position_mm[2].raw(), Q16_16::from_int(30).raw());
     SCOPEKIN_EXPECT_EQ(tracker.pose[3].receive_time_us, bench.clock.now_us());
-    SCOPEKIN_EXPECT_EQ(tracker.tip_force.force_N[2].raw(), Q16_16::from_ratio(3, 2).raw());  // 1.5 N
+    SCOPEKIN_EXPECT_EQ(tracker.tip_force.force_N[2].raw(),
+                       Q16_16::from_ratio(3, 2).raw());  // 1.5 N
 
     // The next period: held, no longer fresh.
     (void)bench.period();
     SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().fresh_mask, 0U);
     SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().valid_mask, kSent);
-    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(),
+                       Q16_16::from_ratio(25, 2).raw());
 
     // A flagged sample (device status) changes nothing the estimator sees; a corrupted frame is a
     // framing fault in both of the box's fault signals.
@@ -353,7 +365,8 @@ SCOPEKIN_TEST(SensorBox, TrackerSamplesReachTheEstimatorInput) {
     (void)tracker_line.device_write(std::span<const std::uint8_t>{corrupted.data(), size});
     (void)bench.period();
     SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().fresh_mask, 0U);
-    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(), Q16_16::from_ratio(25, 2).raw());
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().pose[3].position_mm[0].raw(),
+                       Q16_16::from_ratio(25, 2).raw());
     SCOPEKIN_EXPECT_TRUE((bench.box.tracker_faults() & messages::kTrackerFaultDeviceStatus) != 0U);
     SCOPEKIN_EXPECT_TRUE((bench.box.tracker_faults() & messages::kTrackerFaultFraming) != 0U);
     SCOPEKIN_EXPECT_TRUE((bench.box.box_faults() & messages::kBoxFaultSerialFraming) != 0U);

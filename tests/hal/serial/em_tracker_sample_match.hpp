@@ -8,8 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "em_tracker_stream.hpp"
 #include "drivers/em_tracker_driver.hpp"
+#include "em_tracker_stream.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
 
 namespace scopekin::test {
@@ -22,12 +22,14 @@ inline std::int32_t thousandths_to_q16_raw(std::int32_t value) {
     return static_cast<std::int32_t>(scaled < 0 ? -rounded : rounded);
 }
 
-inline bool pose_matches(const messages::EmPoseSample& sample, const protocol::EmPoseMessage& message) {
+inline bool pose_matches(const messages::EmPoseSample& sample,
+                         const protocol::EmPoseMessage& message) {
     bool same = sample.sensor_id == message.sensor_id &&
                 sample.device_time_us == message.device_time_us &&
                 sample.device_status == message.status;
     for (std::size_t i = 0; i < 3U; ++i) {
-        same = same && sample.position_mm[i].raw() == thousandths_to_q16_raw(message.position_um[i]);
+        same =
+            same && sample.position_mm[i].raw() == thousandths_to_q16_raw(message.position_um[i]);
     }
     for (std::size_t i = 0; i < 4U; ++i) {
         // Q2.14 -> Q16.16 is exact: raw * 4.
@@ -38,8 +40,8 @@ inline bool pose_matches(const messages::EmPoseSample& sample, const protocol::E
 
 inline bool tip_force_matches(const messages::TipForceSample& sample,
                               const protocol::TipForceMessage& message) {
-    bool same = sample.device_time_us == message.device_time_us &&
-                sample.device_status == message.status;
+    bool same =
+        sample.device_time_us == message.device_time_us && sample.device_status == message.status;
     for (std::size_t i = 0; i < 3U; ++i) {
         same = same && sample.force_N[i].raw() == thousandths_to_q16_raw(message.force_mN[i]);
     }
@@ -47,13 +49,15 @@ inline bool tip_force_matches(const messages::TipForceSample& sample,
 }
 
 /// A valid sample (no fault flag) of the right kind that carries exactly `expected`.
-inline bool sample_matches(const messages::EmTrackerSample& sample, const ExpectedEmMessage& expected) {
+inline bool sample_matches(const messages::EmTrackerSample& sample,
+                           const ExpectedEmMessage& expected) {
     if (expected.type == protocol::EmTrackerMessageType::pose) {
-        return sample.kind == messages::EmTrackerSampleKind::pose && sample.pose.fault_flags == 0U &&
-               pose_matches(sample.pose, expected.pose);
+        return sample.kind == messages::EmTrackerSampleKind::pose &&
+               sample.pose.fault_flags == 0U && pose_matches(sample.pose, expected.pose);
     }
     return sample.kind == messages::EmTrackerSampleKind::tip_force &&
-           sample.tip_force.fault_flags == 0U && tip_force_matches(sample.tip_force, expected.tip_force);
+           sample.tip_force.fault_flags == 0U &&
+           tip_force_matches(sample.tip_force, expected.tip_force);
 }
 
 }  // namespace scopekin::test

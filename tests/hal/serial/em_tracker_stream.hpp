@@ -24,7 +24,8 @@ namespace scopekin::test {
 /// xorshift32 (Marsaglia): deterministic on every target.
 class TestPrng {
 public:
-    explicit constexpr TestPrng(std::uint32_t seed) noexcept : state_(seed == 0U ? 0x9E3779B9U : seed) {}
+    explicit constexpr TestPrng(std::uint32_t seed) noexcept
+        : state_(seed == 0U ? 0x9E3779B9U : seed) {}
     constexpr std::uint32_t next() noexcept {
         state_ ^= state_ << 13U;
         state_ ^= state_ >> 17U;
@@ -71,7 +72,8 @@ public:
 
     /// Writes the next event to the front of `out` (at least kMaxStreamEventSize bytes); returns
     /// its size (0 if `out` is too small).  For a valid frame sets `is_valid` and `expected`.
-    std::size_t next(std::span<std::uint8_t> out, ExpectedEmMessage& expected, bool& is_valid) noexcept {
+    std::size_t next(std::span<std::uint8_t> out, ExpectedEmMessage& expected,
+                     bool& is_valid) noexcept {
         is_valid = false;
         if (out.size() < kMaxStreamEventSize) {
             return 0;
@@ -91,8 +93,7 @@ public:
                 expected.tip_force = make_tip_force();
                 is_valid = true;
                 return protocol::encode_tip_force(expected.tip_force, out);
-            case StreamEvent::noise:
-                return write_noise(out);
+            case StreamEvent::noise: return write_noise(out);
             case StreamEvent::corrupted_frame: {
                 const std::size_t size = write_any_frame(out);
                 // One byte after the sync changed: type -> unknown type / bad length, length ->
@@ -111,7 +112,8 @@ public:
                 out[0] = protocol::kEmTrackerSync0;
                 out[1] = protocol::kEmTrackerSync1;
                 const std::uint32_t variant = prng_.below(3U);
-                out[2] = variant == 2U ? static_cast<std::uint8_t>(0x80U | prng_.byte()) : static_cast<std::uint8_t>(1U + variant);
+                out[2] = variant == 2U ? static_cast<std::uint8_t>(0x80U | prng_.byte())
+                                       : static_cast<std::uint8_t>(1U + variant);
                 out[3] = static_cast<std::uint8_t>(0xC0U | prng_.byte());  // >= 192: huge
                 return 4;
             }
@@ -214,7 +216,8 @@ private:
 inline std::size_t generate_em_tracker_stream(EmTrackerStreamGenerator& generator,
                                               std::span<std::uint8_t> stream,
                                               std::span<ExpectedEmMessage> expected,
-                                              std::size_t events, std::size_t& expected_count) noexcept {
+                                              std::size_t events,
+                                              std::size_t& expected_count) noexcept {
     std::size_t size = 0;
     expected_count = 0;
     for (std::size_t event = 0; event < events; ++event) {

@@ -17,7 +17,8 @@
 namespace scopekin::test {
 
 // em_tracker_serial.md §5.
-inline constexpr protocol::EmPoseMessage kSpecPose{1'000'000U, 0U, 0U, {12'345, -6'789, 250'000}, {11585, 0, 0, 11585}};
+inline constexpr protocol::EmPoseMessage kSpecPose{
+    1'000'000U, 0U, 0U, {12'345, -6'789, 250'000}, {11585, 0, 0, 11585}};
 inline constexpr protocol::TipForceMessage kSpecTipForce{1'000'250U, 0U, {-150, 40, 2'500}};
 
 /// The spec's pose from another sensor at another device time.
@@ -55,7 +56,8 @@ struct EmTrackerTestBytes {
     }
     void add_tip_force(const protocol::TipForceMessage& message) noexcept {
         std::array<std::uint8_t, protocol::kEmTrackerMaxFrameSize> frame{};
-        add(std::span<const std::uint8_t>{frame.data(), protocol::encode_tip_force(message, frame)});
+        add(std::span<const std::uint8_t>{frame.data(),
+                                          protocol::encode_tip_force(message, frame)});
     }
     [[nodiscard]] std::span<const std::uint8_t> view() const noexcept {
         return std::span<const std::uint8_t>{bytes.data(), size};

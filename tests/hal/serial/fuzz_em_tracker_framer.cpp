@@ -61,7 +61,8 @@ struct Output {
 /// Checks a popped frame against the input: it must be a real frame of the stream, byte for
 /// byte (sync, header, payload and the CRC that was on the wire), ending exactly where the byte
 /// accounting says the framer has consumed up to (`end`: bytes of frames + bytes discarded).
-void check_frame(const EmTrackerFrame& frame, std::span<const std::uint8_t> stream, std::size_t end) {
+void check_frame(const EmTrackerFrame& frame, std::span<const std::uint8_t> stream,
+                 std::size_t end) {
     const auto type = static_cast<std::uint8_t>(frame.type);
     const std::size_t size = protocol::em_tracker_payload_size(type);
     check(size != 0U);

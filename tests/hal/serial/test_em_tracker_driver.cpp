@@ -8,27 +8,27 @@
 #include <limits>
 #include <span>
 
+#include "drivers/em_tracker_driver.hpp"
 #include "em_tracker_sample_match.hpp"
 #include "em_tracker_stream.hpp"
 #include "em_tracker_test_bytes.hpp"
-#include "drivers/em_tracker_driver.hpp"
 #include "hal/serial_port.hpp"
 #include "portable_check.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
 
 namespace {
 
-using scopekin::fixed_point::Q16_16;
-using scopekin::messages::EmPoseSample;
-using scopekin::messages::EmSensor;
 using scopekin::drivers::EmTrackerDriver;
 using scopekin::drivers::EmTrackerDriverConfig;
-using scopekin::messages::EmTrackerSample;
-using scopekin::messages::EmTrackerSampleKind;
+using scopekin::fixed_point::Q16_16;
 using scopekin::hal::SerialCounters;
 using scopekin::hal::SerialPort;
 using scopekin::hal::SerialStatus;
 using scopekin::hal::SerialTransfer;
+using scopekin::messages::EmPoseSample;
+using scopekin::messages::EmSensor;
+using scopekin::messages::EmTrackerSample;
+using scopekin::messages::EmTrackerSampleKind;
 using scopekin::messages::TipForceSample;
 using scopekin::protocol::EmPoseMessage;
 using scopekin::protocol::TipForceMessage;
@@ -60,8 +60,8 @@ protected:
 
     /// Copies the next bytes of `stream` from `offset` (at most `limit`, as many as fit in
     /// `buffer`) and moves `offset` past them.
-    static SerialTransfer hand_out(Bytes stream, std::size_t& offset, std::span<std::uint8_t> buffer,
-                                   std::size_t limit) {
+    static SerialTransfer hand_out(Bytes stream, std::size_t& offset,
+                                   std::span<std::uint8_t> buffer, std::size_t limit) {
         std::size_t count = stream.size() - offset;
         count = count < buffer.size() ? count : buffer.size();
         count = count < limit ? count : limit;
@@ -164,7 +164,8 @@ SCOPEKIN_TEST(EmTrackerDriver, SpecTipForceBecomesNewtons) {
     SCOPEKIN_EXPECT_EQ(g_driver.counters().tip_forces_ok, 1U);
     // Extremes of the wire convert without saturating: ±32.767 N.
     TipForceMessage extreme = spec_tip_force(2'000'000U);
-    extreme.force_mN = {std::numeric_limits<std::int16_t>::min(), std::numeric_limits<std::int16_t>::max(), 0};
+    extreme.force_mN = {std::numeric_limits<std::int16_t>::min(),
+                        std::numeric_limits<std::int16_t>::max(), 0};
     g_port.input.add_tip_force(extreme);
     (void)g_driver.service(g_port, 8U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
@@ -180,7 +181,8 @@ SCOPEKIN_TEST(EmTrackerDriver, UnknownSensorIsFlaggedCountedAndTouchesNoSensor) 
     (void)g_driver.service(g_port, 1U);
     for (int i = 0; i < 2; ++i) {
         SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-        SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultUnknownSensor});
+        SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags,
+                           std::uint32_t{messages::kEmFaultUnknownSensor});
     }
     SCOPEKIN_EXPECT_EQ(g_driver.counters().unknown_sensor, 2U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().poses_ok, 0U);
@@ -196,7 +198,8 @@ SCOPEKIN_TEST(EmTrackerDriver, PositionRangeIsChecked) {
     EmPoseMessage beyond = spec_pose(1U, 200U);
     beyond.position_um = {0, 1'000'001, 0};
     EmPoseMessage extreme = spec_pose(1U, 300U);
-    extreme.position_um = {std::numeric_limits<std::int32_t>::min(), std::numeric_limits<std::int32_t>::max(), 0};
+    extreme.position_um = {std::numeric_limits<std::int32_t>::min(),
+                           std::numeric_limits<std::int32_t>::max(), 0};
     g_port.input.add_pose(edge);
     g_port.input.add_pose(beyond);
     g_port.input.add_pose(extreme);
@@ -219,14 +222,18 @@ SCOPEKIN_TEST(EmTrackerDriver, PositionRangeIsChecked) {
 SCOPEKIN_TEST(EmTrackerDriver, QuaternionMustBeUnit) {
     reset();
     const std::array<std::array<std::int16_t, 4>, 6> quaternions{{
-        {16384, 0, 0, 0},       // unit
-        {-16384, 0, 0, 0},      // -q, the same rotation
-        {16384, 16384, 0, 0},   // norm² 2
-        {0, 0, 0, 0},           // zero
-        {16220, 0, 0, 0},       // norm² 0.980 (deviation 0.0199): inside 1 ± 0.02
-        {16200, 0, 0, 0},       // norm² 0.978: outside
+        {16384, 0, 0, 0},      // unit
+        {-16384, 0, 0, 0},     // -q, the same rotation
+        {16384, 16384, 0, 0},  // norm² 2
+        {0, 0, 0, 0},          // zero
+        {16220, 0, 0, 0},      // norm² 0.980 (deviation 0.0199): inside 1 ± 0.02
+        {16200, 0, 0, 0},      // norm² 0.978: outside
     }};
-    const std::uint32_t expected[] = {0U, 0U, messages::kEmFaultQuaternionNorm, messages::kEmFaultQuaternionNorm, 0U,
+    const std::uint32_t expected[] = {0U,
+                                      0U,
+                                      messages::kEmFaultQuaternionNorm,
+                                      messages::kEmFaultQuaternionNorm,
+                                      0U,
                                       messages::kEmFaultQuaternionNorm};
     for (std::size_t i = 0; i < quaternions.size(); ++i) {
         EmPoseMessage message = spec_pose(2U, static_cast<std::uint32_t>(100U + i));
@@ -251,7 +258,8 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceTimeMustIncreaseModuloTheWrap) {
         0x0000'0080U,  // backwards: flagged (becomes the reference)
         0x0000'0090U,  // forward again from the new reference
     };
-    const std::uint32_t expected[] = {0U, 0U, messages::kEmFaultTimestamp, messages::kEmFaultTimestamp, 0U};
+    const std::uint32_t expected[] = {0U, 0U, messages::kEmFaultTimestamp,
+                                      messages::kEmFaultTimestamp, 0U};
     for (const std::uint32_t time : times) {
         g_port.input.add_pose(spec_pose(3U, time));
     }
@@ -288,7 +296,8 @@ SCOPEKIN_TEST(EmTrackerDriver, DeviceStatusIsFlagged) {
     SCOPEKIN_EXPECT_EQ(g_sample.pose.fault_flags, std::uint32_t{messages::kEmFaultDeviceStatus});
     SCOPEKIN_EXPECT_EQ(g_sample.pose.device_status, 1U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags, std::uint32_t{messages::kEmFaultDeviceStatus});
+    SCOPEKIN_EXPECT_EQ(g_sample.tip_force.fault_flags,
+                       std::uint32_t{messages::kEmFaultDeviceStatus});
     SCOPEKIN_EXPECT_EQ(g_driver.counters().device_status, 2U);
     SCOPEKIN_EXPECT_TRUE(g_driver.stale(EmSensor::tip));  // a flagged sample does not refresh
     SCOPEKIN_EXPECT_TRUE(g_driver.tip_force_stale());
@@ -441,7 +450,8 @@ SCOPEKIN_TEST(EmTrackerDriver, ServiceReadsABoundedNumberOfBytes) {
         g_port.input.add_pose(spec_pose(static_cast<std::uint8_t>(i % 4U), 100U + i));
     }
     const auto first = g_driver.service(g_port, 0U);
-    constexpr std::size_t per_call = EmTrackerDriver::kReadChunkBytes * EmTrackerDriver::kReadsPerService;
+    constexpr std::size_t per_call =
+        EmTrackerDriver::kReadChunkBytes * EmTrackerDriver::kReadsPerService;
     SCOPEKIN_EXPECT_EQ(first.bytes_read, per_call);
     SCOPEKIN_EXPECT_EQ(g_port.reads, EmTrackerDriver::kReadsPerService);
     SCOPEKIN_EXPECT_EQ(first.samples, 8U);  // 256 bytes = 8 poses exactly
@@ -473,14 +483,17 @@ SCOPEKIN_TEST(EmTrackerDriver, QueueOverflowDropsTheOldest) {
     static std::array<std::uint8_t, 40 * 32> stream{};
     std::size_t size = 0;
     for (std::uint32_t i = 0; i < 40U; ++i) {
-        size += scopekin::protocol::encode_em_pose(spec_pose(1U, 1000U + i), std::span<std::uint8_t>{stream}.subspan(size));
+        size += scopekin::protocol::encode_em_pose(spec_pose(1U, 1000U + i),
+                                                   std::span<std::uint8_t>{stream}.subspan(size));
     }
     SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 40U);
     SCOPEKIN_EXPECT_EQ(g_driver.queued(), EmTrackerDriver::kSampleQueueCapacity);
-    SCOPEKIN_EXPECT_EQ(g_driver.counters().samples_dropped, 40U - EmTrackerDriver::kSampleQueueCapacity);
+    SCOPEKIN_EXPECT_EQ(g_driver.counters().samples_dropped,
+                       40U - EmTrackerDriver::kSampleQueueCapacity);
     SCOPEKIN_EXPECT_TRUE((g_driver.fault_flags() & messages::kEmFaultQueueOverflow) != 0U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
-    SCOPEKIN_EXPECT_EQ(g_sample.pose.device_time_us, 1000U + 40U - EmTrackerDriver::kSampleQueueCapacity);
+    SCOPEKIN_EXPECT_EQ(g_sample.pose.device_time_us,
+                       1000U + 40U - EmTrackerDriver::kSampleQueueCapacity);
     // The latest value is the newest sample, whatever the queue dropped.
     SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::twenty_cm).device_time_us, 1039U);
 }
@@ -528,7 +541,8 @@ SCOPEKIN_TEST(EmTrackerDriver, RandomisedStreamYieldsExactlyTheValidSamples) {
         (void)g_driver.service(port, now_us);
         while (g_driver.pop(g_sample)) {
             if (popped < expected_count) {
-                const bool same = scopekin::test::sample_matches(g_sample, g_driver_expected[popped]);
+                const bool same =
+                    scopekin::test::sample_matches(g_sample, g_driver_expected[popped]);
                 matched += same ? 1U : 0U;
             }
             ++popped;

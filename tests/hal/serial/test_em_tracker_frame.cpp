@@ -42,8 +42,9 @@ static_assert(em_tracker_crc16(Bytes{kCheckInput}) == 0x29B1U);
 constexpr std::array<std::uint8_t, 32> kSpecPoseFrame{
     0xA5, 0x5A, 0x01, 0x1A, 0x40, 0x42, 0x0F, 0x00, 0x00, 0x00, 0x39, 0x30, 0x00, 0x00, 0x7B, 0xE5,
     0xFF, 0xFF, 0x90, 0xD0, 0x03, 0x00, 0x41, 0x2D, 0x00, 0x00, 0x00, 0x00, 0x41, 0x2D, 0xCB, 0x4B};
-constexpr std::array<std::uint8_t, 17> kSpecTipForceFrame{
-    0xA5, 0x5A, 0x02, 0x0B, 0x3A, 0x43, 0x0F, 0x00, 0x00, 0x6A, 0xFF, 0x28, 0x00, 0xC4, 0x09, 0x87, 0x60};
+constexpr std::array<std::uint8_t, 17> kSpecTipForceFrame{0xA5, 0x5A, 0x02, 0x0B, 0x3A, 0x43,
+                                                          0x0F, 0x00, 0x00, 0x6A, 0xFF, 0x28,
+                                                          0x00, 0xC4, 0x09, 0x87, 0x60};
 static_assert(em_tracker_crc16(Bytes{kSpecPoseFrame}.subspan(2, 28)) == 0x4BCBU);
 static_assert(em_tracker_crc16(Bytes{kSpecTipForceFrame}.subspan(2, 13)) == 0x6087U);
 
@@ -200,7 +201,8 @@ SCOPEKIN_TEST(EmTrackerFrame, RoundTripOfEveryMessageTypeAtTheFieldLimits) {
 SCOPEKIN_TEST(EmTrackerFrame, EncoderRefusesSmallBuffersAndLongPayloads) {
     std::array<std::uint8_t, 31> small{};
     SCOPEKIN_EXPECT_EQ(encode_em_pose(kSpecPose, small), 0U);
-    SCOPEKIN_EXPECT_EQ(encode_tip_force(kSpecTipForce, std::span<std::uint8_t>{small.data(), 16}), 0U);
+    SCOPEKIN_EXPECT_EQ(encode_tip_force(kSpecTipForce, std::span<std::uint8_t>{small.data(), 16}),
+                       0U);
     static std::array<std::uint8_t, 300> big{};
     static std::array<std::uint8_t, 310> out{};
     SCOPEKIN_EXPECT_EQ(encode_em_tracker_frame(0x01U, Bytes{big.data(), 256}, out), 0U);
@@ -210,7 +212,8 @@ SCOPEKIN_TEST(EmTrackerFrame, EncoderRefusesSmallBuffersAndLongPayloads) {
 
 SCOPEKIN_TEST(EmTrackerFramer, ResynchronisesAfterGarbage) {
     reset();
-    const std::array<std::uint8_t, 10> garbage{0x00, 0xA5, 0xA5, 0x11, 0x5A, 0xA5, 0x5A, 0xFF, 0xA5, 0x13};
+    const std::array<std::uint8_t, 10> garbage{0x00, 0xA5, 0xA5, 0x11, 0x5A,
+                                               0xA5, 0x5A, 0xFF, 0xA5, 0x13};
     g_stream.add(garbage);
     g_stream.add_pose(spec_pose(0U, 1));
     g_stream.add(garbage);
@@ -410,10 +413,10 @@ SCOPEKIN_TEST(EmTrackerFramer, RandomisedStreamYieldsExactlyTheValidFrames) {
                 frame_bytes += frame.payload_length + scopekin::protocol::kEmTrackerOverhead;
                 if (popped < expected_count) {
                     const auto& expected = g_stress_expected[popped];
-                    const bool same =
-                        frame.type == expected.type &&
-                        (expected.type == EmTrackerMessageType::pose ? same_pose(frame, expected.pose)
-                                                                     : same_tip_force(frame, expected.tip_force));
+                    const bool same = frame.type == expected.type &&
+                                      (expected.type == EmTrackerMessageType::pose
+                                           ? same_pose(frame, expected.pose)
+                                           : same_tip_force(frame, expected.tip_force));
                     if (same) {
                         ++matched;
                     } else {
@@ -434,6 +437,7 @@ SCOPEKIN_TEST(EmTrackerFramer, RandomisedStreamYieldsExactlyTheValidFrames) {
         SCOPEKIN_EXPECT_TRUE(framer.counters().bad_checksum > 0U);
         SCOPEKIN_EXPECT_TRUE(framer.counters().bad_length > 0U);
         SCOPEKIN_EXPECT_TRUE(framer.counters().unknown_type > 0U);
-        SCOPEKIN_EXPECT_EQ(size, frame_bytes + framer.counters().bytes_discarded + framer.buffered());
+        SCOPEKIN_EXPECT_EQ(size,
+                           frame_bytes + framer.counters().bytes_discarded + framer.buffered());
     }
 }

@@ -25,24 +25,25 @@
 
 #include <gtest/gtest.h>
 
+#include "drivers/em_tracker_driver.hpp"
 #include "em_tracker_sample_match.hpp"
 #include "em_tracker_stream.hpp"
-#include "drivers/em_tracker_driver.hpp"
 #include "hal/posix_serial/posix_serial_port.hpp"
 
 namespace {
 
 using scopekin::drivers::EmTrackerDriver;
-using scopekin::messages::EmTrackerSample;
 using scopekin::hal::PosixSerialPort;
 using scopekin::hal::SerialPort;
 using scopekin::hal::SerialStatus;
 using scopekin::hal::SerialTransfer;
+using scopekin::messages::EmTrackerSample;
 using Clock = std::chrono::steady_clock;
 
 std::uint64_t now_us() {
     return static_cast<std::uint64_t>(
-        std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch()).count());
+        std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch())
+            .count());
 }
 
 /// The master side of a pseudo-terminal (non-blocking; the slave is opened by PosixSerialPort).
@@ -96,7 +97,8 @@ public:
     }
 
     /// Reads exactly `count` bytes within `timeout`, or fewer if they do not come.
-    std::vector<std::uint8_t> read_some(std::size_t count, std::chrono::milliseconds timeout) const {
+    std::vector<std::uint8_t> read_some(std::size_t count,
+                                        std::chrono::milliseconds timeout) const {
         std::vector<std::uint8_t> bytes;
         const auto deadline = Clock::now() + timeout;
         std::array<std::uint8_t, 512> buffer{};
@@ -105,7 +107,8 @@ public:
             if (::poll(&descriptor, 1, 20) <= 0) {
                 continue;
             }
-            const ssize_t got = ::read(fd_, buffer.data(), std::min(buffer.size(), count - bytes.size()));
+            const ssize_t got =
+                ::read(fd_, buffer.data(), std::min(buffer.size(), count - bytes.size()));
             if (got > 0) {
                 bytes.insert(bytes.end(), buffer.begin(), buffer.begin() + got);
             }
@@ -119,7 +122,9 @@ private:
     std::string error_;
 };
 
-std::string message(const std::array<char, 256>& error) { return std::string(error.data()); }
+std::string message(const std::array<char, 256>& error) {
+    return std::string(error.data());
+}
 
 /// Opens `port` on the slave side of `master` at 115200 baud (raw mode); says why not.
 ::testing::AssertionResult open_on_pty(const PtyMaster& master, PosixSerialPort& port) {
@@ -163,7 +168,8 @@ TEST(PosixSerialPort, UnsupportedBaudRateIsAClearError) {
     PosixSerialPort port;
     std::array<char, 256> error{};
     EXPECT_FALSE(port.open(master.slave_path(), 12345U, error));
-    EXPECT_NE(message(error).find("unsupported baud rate 12345"), std::string::npos) << message(error);
+    EXPECT_NE(message(error).find("unsupported baud rate 12345"), std::string::npos)
+        << message(error);
     EXPECT_NE(message(error).find(master.slave_path()), std::string::npos) << message(error);
     EXPECT_FALSE(port.is_open());
     EXPECT_EQ(port.baud(), 0U);
@@ -193,7 +199,8 @@ TEST(PosixSerialPort, RawModePassesEveryByteValueBothWays) {
     const SerialTransfer sent = port.write(all, 1'000'000U);
     EXPECT_EQ(sent.status, SerialStatus::ok);
     EXPECT_EQ(sent.count, all.size());
-    const std::vector<std::uint8_t> at_master = master.read_some(all.size(), std::chrono::seconds(2));
+    const std::vector<std::uint8_t> at_master =
+        master.read_some(all.size(), std::chrono::seconds(2));
     EXPECT_EQ(at_master, std::vector<std::uint8_t>(all.begin(), all.end()));
 
     // Tracker -> box: no input processing (no CR -> LF, no signals, no echo, no EOF on ^D).
@@ -206,7 +213,8 @@ TEST(PosixSerialPort, RawModePassesEveryByteValueBothWays) {
         const SerialTransfer got = port.read(buffer, 100'000U);
         ASSERT_NE(got.status, SerialStatus::failed);
         ASSERT_NE(got.status, SerialStatus::closed);
-        at_port.insert(at_port.end(), buffer.begin(), buffer.begin() + static_cast<std::ptrdiff_t>(got.count));
+        at_port.insert(at_port.end(), buffer.begin(),
+                       buffer.begin() + static_cast<std::ptrdiff_t>(got.count));
     }
     EXPECT_EQ(at_port, std::vector<std::uint8_t>(all.begin(), all.end()));
     // Nothing was echoed back to the master.
@@ -238,7 +246,8 @@ TEST(PosixSerialPort, ReadTimesOutWhenNothingComesAndReportsClosedAfterHangUp) {
     const auto hang_up = Clock::now();
     EXPECT_EQ(port.read(buffer, 1'000'000U).status, SerialStatus::closed);
     EXPECT_EQ(port.read(buffer, 0U).status, SerialStatus::closed);
-    EXPECT_LT(Clock::now() - hang_up, std::chrono::milliseconds(500));  // at once, not after the timeout
+    EXPECT_LT(Clock::now() - hang_up,
+              std::chrono::milliseconds(500));  // at once, not after the timeout
     EXPECT_EQ(port.counters().backend_errors, 0U);
 
     // Moving the port moves the descriptor; the moved-from one is closed.
@@ -257,7 +266,7 @@ TEST(EmTrackerOverPty, DriverOutputMatchesTheValidFramesExactly) {
     scopekin::test::EmTrackerStreamGenerator generator(0x7E57BE4CU);
     std::size_t expected_count = 0;
     stream.resize(scopekin::test::generate_em_tracker_stream(generator, stream, expected, kEvents,
-                                                              expected_count));
+                                                             expected_count));
     expected.resize(expected_count);
     ASSERT_GT(expected_count, kEvents / 2U);
 
@@ -277,7 +286,8 @@ TEST(EmTrackerOverPty, DriverOutputMatchesTheValidFramesExactly) {
         while (ok && offset < stream.size()) {
             std::size_t chunk = 1U + prng.below(97U);  // split frames anywhere
             chunk = std::min(chunk, stream.size() - offset);
-            ok = master.write_all(std::span<const std::uint8_t>{stream}.subspan(offset, chunk), stop, deadline);
+            ok = master.write_all(std::span<const std::uint8_t>{stream}.subspan(offset, chunk),
+                                  stop, deadline);
             offset += chunk;
             if (prng.below(4U) == 0U) {
                 std::this_thread::sleep_for(std::chrono::microseconds(prng.below(400U)));
@@ -334,9 +344,10 @@ TEST(EmTrackerOverPty, DriverOutputMatchesTheValidFramesExactly) {
     // frame still waiting for its end (the stream may end with a truncated frame).
     std::size_t frame_bytes = 0;
     for (const auto& message : expected) {
-        frame_bytes += message.type == scopekin::protocol::EmTrackerMessageType::pose
-                           ? scopekin::protocol::kEmTrackerOverhead + scopekin::protocol::kEmPosePayloadSize
-                           : scopekin::protocol::kEmTrackerOverhead + scopekin::protocol::kTipForcePayloadSize;
+        frame_bytes +=
+            message.type == scopekin::protocol::EmTrackerMessageType::pose
+                ? scopekin::protocol::kEmTrackerOverhead + scopekin::protocol::kEmPosePayloadSize
+                : scopekin::protocol::kEmTrackerOverhead + scopekin::protocol::kTipForcePayloadSize;
     }
     EXPECT_EQ(frame_bytes + counters.link.bytes_discarded + driver.buffered_bytes(), stream.size());
 
