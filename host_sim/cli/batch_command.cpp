@@ -162,9 +162,10 @@ int run_batch(const BatchOptions& options) {
 
     try {
         const fs::path dir(options.out);
-        prepare_directory(dir, {});
         char name[64];
         std::snprintf(name, sizeof name, "summary_shard_%zu_of_%zu.csv", shard, shards);
+        prepare_directory(dir,
+                          {name});  // the old shard summary goes first; the new is renamed last
         PartFile summary(dir / name, dir / (std::string(name) + ".incomplete"));
         summary.stream() << kSummaryHeader << "\n";
         std::printf("shard %zu/%zu: %zu of the manifest's %zu entries\n", shard, shards,
@@ -290,13 +291,14 @@ int run_merge(const MergeOptions& options) {
             }
         }
     }
-    std::ofstream out(options.out);
-    out << kSummaryHeader << "\n";
-    for (const auto& [entry, line] : rows)
-        out << line << "\n";
-    out.close();
-    if (!out) {
-        std::cerr << "scopekin batch-merge: cannot write " << options.out << "\n";
+    try {
+        PartFile merged{fs::path(options.out)};
+        merged.stream() << kSummaryHeader << "\n";
+        for (const auto& [entry, line] : rows)
+            merged.stream() << line << "\n";
+        merged.finish(true);
+    } catch (const OutputError& e) {
+        std::cerr << "scopekin batch-merge: " << e.what() << "\n";
         return 3;
     }
     std::vector<std::size_t> missing;

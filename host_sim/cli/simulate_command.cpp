@@ -74,8 +74,7 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
 int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
     model::io::BeamProblem& p = *sc.beam_problem;
     const fs::path dir(options.out);
-    prepare_directory(
-        dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "summary.json"});
+    prepare_directory(dir, {"summary.json", "recording.csv", "recording.incomplete.csv"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     if (!options.quiet)
         std::cerr << "solving the free beam " << sc.source
