@@ -341,8 +341,10 @@ void add_batch_commands(CLI::App& app) {
     cmd->add_option("--shard", options->shard, "I/N: this job's shard (0-based) of N")
         ->default_val("0/1");
     cmd->add_option("--out", options->out, "Output directory")->required();
-    cmd->add_option("--seed", options->seed, "Seed of the sensor models for the scenarios")
-        ->default_val(1);
+    cmd->add_option("--seed", options->seed,
+                    "Seed of the sensor models for the scenarios (0 .. 2^64-1)")
+        ->default_val(1)
+        ->check(whole_number());
     cmd->add_flag("--quiet", options->quiet, "No progress bars");
     cmd->callback([options]() { throw CLI::RuntimeError(run_batch(*options)); });
 

@@ -9,10 +9,15 @@
 #include <cstring>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <system_error>
+
+#include "model/io/strict_json.hpp"
 
 extern char** environ;
 
@@ -134,6 +139,34 @@ void commit_part(const fs::path& path) {
 void write_json(const fs::path& path, const nlohmann::ordered_json& json) {
     write_json_part(path, json);
     commit_part(path);
+}
+
+CLI::Validator positive_seconds() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            double value = 0;
+            const char* end = text.data() + text.size();
+            const auto r = std::from_chars(text.data(), end, value);
+            if (text.empty() || r.ec != std::errc() || r.ptr != end || !std::isfinite(value) ||
+                !(value > 0))
+                return model::io::quote_text(text) + " is not a positive, finite number of seconds";
+            return {};
+        },
+        "SECONDS");
+}
+
+CLI::Validator whole_number() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            std::uint64_t value = 0;
+            const char* end = text.data() + text.size();
+            const auto r = std::from_chars(text.data(), end, value);
+            if (text.empty() || r.ec != std::errc() || r.ptr != end)
+                return model::io::quote_text(text) + " is not a whole number from 0 to " +
+                       std::to_string(std::numeric_limits<std::uint64_t>::max());
+            return {};
+        },
+        "UINT");
 }
 
 std::string ProgramResult::describe() const {

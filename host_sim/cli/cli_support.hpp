@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "model/scenario/simulation.hpp"
@@ -72,6 +73,12 @@ void write_json(const std::filesystem::path& path, const nlohmann::ordered_json&
 std::filesystem::path write_json_part(const std::filesystem::path& path,
                                       const nlohmann::ordered_json& json);
 void commit_part(const std::filesystem::path& path);
+
+/// Option checks with short messages (CLI11's own print a 309-digit bound, and an unsigned
+/// option would take "-1" as 2^64 - 1): a positive, finite number of seconds; a whole number
+/// from 0 to 2^64 - 1 (a seed).
+CLI::Validator positive_seconds();
+CLI::Validator whole_number();
 
 /// Runs a program with these arguments (argv[0] is the program's path) and waits for it: no
 /// shell, so every argument reaches the program as given, whatever characters it holds.

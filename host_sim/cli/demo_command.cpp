@@ -122,8 +122,10 @@ void add_demo_command(CLI::App& app) {
     cmd->add_option("--scenario", options->scenario,
                     "Another world scenario to run instead of the bundled one")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--seed", options->seed, "Seed of the sensor models' noise and dropouts")
-        ->default_val(1);
+    cmd->add_option("--seed", options->seed,
+                    "Seed of the sensor models' noise and dropouts (0 .. 2^64-1)")
+        ->default_val(1)
+        ->check(whole_number());
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_demo(*options)); });
 }

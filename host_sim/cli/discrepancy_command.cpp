@@ -26,6 +26,7 @@ struct DiscrepancyOptions {
     std::string model;
     std::string out;
     unsigned threads = 2;
+    double max_gap_s = recording::kDefaultMaxGap_s;
     double fit_budget_s = discrepancy::kDefaultFitBudget_s;
     bool quiet = false;
     bool plots = true;
@@ -136,7 +137,9 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
     if (o.thesis_cantilever) return run_thesis_cantilever_case(o);
     recording::Recording rec;
     try {
-        rec = recording::RecordingReader().read_file(o.recording);
+        recording::RecordingReaderOptions reader_options;
+        reader_options.max_gap_s = o.max_gap_s;
+        rec = recording::RecordingReader(reader_options).read_file(o.recording);
     } catch (const recording::RecordingError& e) {
         std::cerr << "scopekin discrepancy: invalid recording: " << e.what() << "\n";
         return 2;
@@ -292,9 +295,15 @@ void add_discrepancy_command(CLI::App& app) {
     cmd->add_option("--out", options->out,
                     "Output directory (created if missing; old outputs in it are replaced)")
         ->required();
-    cmd->add_option("--threads", options->threads, "Model runs in parallel")
+    cmd->add_option("--threads", options->threads, "Model runs in parallel (1 .. 64)")
         ->default_val(2)
+        ->check(whole_number())
         ->check(CLI::Range(1, 64));
+    cmd->add_option("--max-gap-s", options->max_gap_s,
+                    "Refuse a recording with two rows further apart than this [s] (the line is "
+                    "named): the model would be run across the gap")
+        ->default_val(recording::kDefaultMaxGap_s)
+        ->check(positive_seconds());
     cmd->add_option("--fit-budget-s", options->fit_budget_s,
                     "Recording seconds one fit run simulates at most (at least 80: ten windows of "
                     "3 s spin-up and 5 s "
@@ -304,6 +313,7 @@ void add_discrepancy_command(CLI::App& app) {
                     "finally named are "
                     "checked over the whole recording")
         ->default_val(discrepancy::kDefaultFitBudget_s)
+        ->check(positive_seconds())
         ->check(CLI::Range(discrepancy::kMinFitBudget_s, 100000.0));
     cmd->add_flag(
         "--no-plots", [options](std::int64_t) { options->plots = false; },
