@@ -8,6 +8,7 @@
 #include <string>
 
 #include "host_sim/cli/cli_support.hpp"
+#include "host_sim/cli/live_run.hpp"
 #include "host_sim/replay/candump_replay.hpp"
 #include "host_sim/simulator/box_observer.hpp"
 
@@ -60,6 +61,7 @@ int run_replay(const ReplayOptions& options) {
         }
         s["alarms"] = box["alarms"];
         s["firmware"] = box;
+        s["box"] = observer.box_section();
         s["wall_time_s"] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         s["files"] = {{"firmware", "firmware.csv"}};
@@ -72,6 +74,7 @@ int run_replay(const ReplayOptions& options) {
                         static_cast<unsigned long long>(r.differing_frames),
                         r.first_difference.empty() ? "" : "; first: ", r.first_difference.c_str());
         }
+        print_box_faults(s["box"], "");
         std::printf("wrote %s, %s\n", (dir / "firmware.csv").string().c_str(),
                     (dir / "summary.json").string().c_str());
         return log.box_log && (r.differing_frames != 0 || r.compared_frames == 0) ? 1 : 0;

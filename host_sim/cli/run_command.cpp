@@ -8,6 +8,7 @@
 #include <string>
 
 #include "host_sim/cli/cli_support.hpp"
+#include "host_sim/cli/live_run.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/simulator/box_observer.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
@@ -77,6 +78,7 @@ int run_recording(const RunOptions& options) {
         s["periods"] = loop.periods();
         s["alarms"] = box["alarms"];
         s["firmware"] = box;
+        s["box"] = observer.box_section();
         s["wall_time_s"] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         s["files"] = {{"firmware", "firmware.csv"}};
@@ -92,6 +94,7 @@ int run_recording(const RunOptions& options) {
             rec.rows.size(), end_s, static_cast<unsigned long long>(loop.periods()),
             box["alarms"].size(), rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
             (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
+        print_box_faults(s["box"], "");
         return 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin run: " << e.what() << "\n";

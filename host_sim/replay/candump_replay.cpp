@@ -108,7 +108,7 @@ ReplayResult replay_candump(const CandumpLog& log,
         bus->sent.clear();
         box->run_period(time_us, 0);
         ++result.periods;
-        if (on_period) on_period({time_us, &box->outputs(), box->box_faults()});
+        if (on_period) on_period({time_us, &box->outputs(), box->box_faults(), box.get()});
     };
     auto is_input = [](const hal::CandumpRecord& r) {
         return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);

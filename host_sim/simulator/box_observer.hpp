@@ -1,7 +1,9 @@
 #pragma once
 // Watches the box period by period: writes firmware.csv, and keeps what a summary needs — the
 // alarm timeline (raised / cleared times of each alarm), the peak estimated contact force and
-// where, and how many periods carried each fault flag.
+// where, and how many periods carried each fault flag: the estimator's (kinetics FaultFlag) and
+// the box's own (messages::BoxFault, TrackerFault: its drivers, CAN controller and schedule),
+// with the box's counters at the end (box_section(): summary.json "box").
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -11,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "hal/can_bus.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
 
 namespace scopekin::host_sim {
@@ -34,10 +37,26 @@ struct BoxObservation {
     std::array<std::uint64_t, 14> fault_periods{};  ///< periods with kinetics fault bit k set
     std::array<double, 14> fault_first_s{};         ///< time of the first such period [s] (if any)
     std::uint64_t estimate_invalid_periods = 0;
+    std::array<std::uint64_t, 16> box_fault_periods{};  ///< periods with BoxFault bit k set
+    std::array<double, 16> box_fault_first_s{};
+    std::array<std::uint64_t, 8> tracker_fault_periods{};  ///< periods with TrackerFault bit k
+    std::array<double, 8> tracker_fault_first_s{};
+    /// The box's counters after the last period (known only when the periods carry the box).
+    bool box_known = false;
+    executive::BoxCounters box_counters{};
+    drivers::HandleSensorCounters handle_counters{};
+    drivers::EmTrackerDriverCounters em_counters{};
+    hal::CanCounters can_counters{};
+    std::uint32_t can_error_frames = 0, can_bus_off_events = 0, can_recoveries = 0;
+    std::uint8_t box_state = 0;  ///< protocol::BoxState of the last period
 };
 
 /// Names of the kinetics fault bits (kinetics_io.hpp FaultFlag), bit k.
 const std::array<const char*, 14>& kinetics_fault_names();
+/// Names of the box's fault bits (messages/box_faults.hpp BoxFault, TrackerFault), bit k
+/// ("bit_14" for a bit without a name).
+const std::array<const char*, 16>& box_fault_names();
+const std::array<const char*, 8>& tracker_fault_names();
 
 class BoxObserver {
 public:
@@ -47,6 +66,11 @@ public:
     const BoxObservation& observation() const { return observation_; }
     /// The observation as JSON (alarms, peak, fault periods by name).
     nlohmann::ordered_json to_json() const;
+    /// The box's own faults and counters as JSON (summary.json "box"): fault_periods and
+    /// fault_first_s by BoxFault name, tracker_fault_periods and tracker_fault_first_s, the
+    /// counters of the executive, the handle sensors (counter_gaps ...), the EM tracker and the
+    /// CAN bus.
+    nlohmann::ordered_json box_section() const;
 
 private:
     void edge(const char* kind, bool now, bool& before, double time_s, double tip_mm);

@@ -30,10 +30,11 @@ std::string firmware_csv_header() {
         h += "," + s + "arc_mm," + s + "path_mm," + s + "normal_N," + s + "tangential_N," + s +
              "state";
     }
-    return h;
+    return h + ",box_faults,tracker_faults";
 }
 
-std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o) {
+std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
+                             std::uint16_t box_faults, std::uint8_t tracker_faults) {
     char time[32];
     std::snprintf(time, sizeof time, "%" PRIu64 ".%06" PRIu64, time_us / 1000000U,
                   time_us % 1000000U);
@@ -57,6 +58,8 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o) 
         put_q(line, s.tangential_force_N);
         put_u(line, static_cast<std::uint64_t>(s.state));
     }
+    put_u(line, box_faults);
+    put_u(line, tracker_faults);
     return line;
 }
 

@@ -58,7 +58,7 @@ void FirmwareLoop::run_period(std::uint64_t time_us) {
             default: ++published_.other; break;
         }
     }
-    if (on_period_) on_period_({time_us, &box_->outputs(), box_->box_faults()});
+    if (on_period_) on_period_({time_us, &box_->outputs(), box_->box_faults(), box_.get()});
 }
 
 }  // namespace scopekin::host_sim

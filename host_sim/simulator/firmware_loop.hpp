@@ -27,11 +27,13 @@ namespace scopekin::host_sim {
 /// The firmware's period: the box's 200 Hz (BoxConfig default).
 inline constexpr std::uint32_t kBoxPeriodUs = 5000;
 
-/// What the box did in one period: its release time and the estimator's outputs.
+/// What the box did in one period: its release time and the estimator's outputs, and the box
+/// itself for its fault bits and counters (null: only box_faults is known).
 struct BoxPeriod {
     std::uint64_t time_us = 0;
     const kinetics::Outputs* outputs = nullptr;
     std::uint16_t box_faults = 0;  ///< messages::BoxFault bits (BoxStatus.DriverFaults)
+    const executive::SensorBox* box = nullptr;
 };
 
 /// Frames the box published, by message (drained from the wire every period).

@@ -188,6 +188,7 @@ LiveResult run_live(const model::Scenario& scenario,
                         {"snapshots", snapshots}};
     result.box = observer.observation();
     result.box_json = observer.to_json();
+    result.box_section = observer.box_section();
     result.firmware_periods = firmware.periods();
     result.final_tip_path_mm = latest.tip_path_mm;
     result.final_tip_region = latest.tip_region;

@@ -38,7 +38,8 @@ struct LiveResult {
     model::SimulationSummary world;
     BoxObservation box;
     nlohmann::ordered_json box_json;
-    nlohmann::ordered_json snapshots;                        ///< {"colon": ..., "snapshots": [...]}
+    nlohmann::ordered_json box_section;  ///< the box's own faults and counters (summary "box")
+    nlohmann::ordered_json snapshots;    ///< {"colon": ..., "snapshots": [...]}
     std::map<std::string, RegionAdvance> advance_by_region;  ///< region name -> sums
     double peak_measured_handle_force_N = 0;
     double peak_true_tip_contact_force_N = 0;
