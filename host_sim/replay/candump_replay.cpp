@@ -42,6 +42,23 @@ bool compared_output(std::uint32_t id) {
            id == protocol::kAlarmsId || id == protocol::kStationForcesId;
 }
 
+/// A candump time stamp as the log writes it: seconds.microseconds.
+std::string stamp_text(std::uint64_t time_us) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%llu.%06llu", static_cast<unsigned long long>(time_us / 1000000U),
+                  static_cast<unsigned long long>(time_us % 1000000U));
+    return b;
+}
+
+/// A duration in µs as exact seconds, trailing zeros dropped ("60", "0.0005", "1000000000").
+std::string seconds_text(std::uint64_t duration_us) {
+    std::string text = stamp_text(duration_us);
+    while (text.back() == '0')
+        text.pop_back();
+    if (text.back() == '.') text.pop_back();
+    return text;
+}
+
 std::string frame_text(const hal::CanFrame& f) {
     std::string s;
     char b[16];
@@ -62,7 +79,29 @@ bool is_box_output_id(std::uint32_t id) {
            id == protocol::kBoxCountersId || id == protocol::kStationForcesId;
 }
 
-CandumpLog read_candump_log(const std::string& path) {
+/// A frame the box receives (anything but the box's own outputs).
+bool is_input(const hal::CandumpRecord& r) {
+    return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
+}
+
+namespace {
+
+/// Refuses line `number` (time stamp `now`) for its relation to record `previous` of `log`.
+[[noreturn]] void refuse_time_stamp(const std::string& path, const CandumpLog& log,
+                                    std::size_t previous, std::size_t number, std::uint64_t now,
+                                    const char* relation, const std::string& reason) {
+    const std::uint64_t before = log.records[previous].timestamp_us;
+    const std::uint64_t apart = now > before ? now - before : before - now;
+    throw CandumpLineError(path + ": line " + std::to_string(number) + ": time stamp " +
+                               stamp_text(now) + " is " + seconds_text(apart) + relation +
+                               " line " + std::to_string(log.lines[previous]) + "'s " +
+                               stamp_text(before) + ": " + reason,
+                           number);
+}
+
+}  // namespace
+
+CandumpLog read_candump_log(const std::string& path, const CandumpReadOptions& options) {
     std::ifstream in(path);
     if (!in) throw CandumpLineError(path + ": cannot be read", 0);
     CandumpLog log;
@@ -78,12 +117,13 @@ CandumpLog read_candump_log(const std::string& path) {
                 path + ": line " + std::to_string(number) + ": " + hal::describe(parse) +
                     " (expected candump -L format: '(1700000000.123456) can0 110#0102030405')",
                 number);
-        if (!log.records.empty() &&
-            record.timestamp_us + 1000000U < log.records.back().timestamp_us)
-            throw CandumpLineError(
-                path + ": line " + std::to_string(number) +
-                    ": the timestamp goes back by more than 1 s (two recordings in one file?)",
-                number);
+        if (!log.records.empty() && record.timestamp_us > log.records.back().timestamp_us &&
+            record.timestamp_us - log.records.back().timestamp_us > options.max_gap_us)
+            refuse_time_stamp(
+                path, log, log.records.size() - 1U, number, record.timestamp_us, " s after",
+                "longer than the largest gap, --max-gap-s " + seconds_text(options.max_gap_us) +
+                    " s (a replay runs the box every 5 ms across it; raise "
+                    "--max-gap-s if the pause is real)");
         if (!record.frame.error && !record.frame.extended &&
             record.frame.id == protocol::kKineticEstimateId)
             log.box_log = true;
@@ -91,6 +131,21 @@ CandumpLog read_candump_log(const std::string& path) {
         log.lines.push_back(number);
     }
     if (log.records.empty()) throw CandumpLineError(path + ": no CAN frames in the log", 0);
+    // Time order.  A sensor log: no line before the one above it.  A box log: the frames the box
+    // received in time order, and its own frames (stamped with their period's time, which the
+    // recorder takes before it reads that period's frames) in time order; only the two may
+    // interleave out of order.
+    std::size_t last[2] = {log.records.size(), log.records.size()};  // [input, output]
+    for (std::size_t i = 0; i < log.records.size(); ++i) {
+        const std::size_t stream = log.box_log && !is_input(log.records[i]) ? 1U : 0U;
+        const std::size_t previous = last[stream];
+        if (previous < i && log.records[i].timestamp_us < log.records[previous].timestamp_us)
+            refuse_time_stamp(path, log, previous, log.lines[i], log.records[i].timestamp_us,
+                              " s before",
+                              "a candump log must be in time order (equal time stamps are fine; "
+                              "a reversed, shuffled or spliced log is not one recording)");
+        last[stream] = i;
+    }
     return log;
 }
 
@@ -109,9 +164,6 @@ ReplayResult replay_candump(const CandumpLog& log,
         box->run_period(time_us, 0);
         ++result.periods;
         if (on_period) on_period({time_us, &box->outputs(), box->box_faults()});
-    };
-    auto is_input = [](const hal::CandumpRecord& r) {
-        return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
     };
 
     if (log.box_log) {
