@@ -32,6 +32,10 @@ enum BoxFault : std::uint16_t {
     kBoxFaultSerialFraming = 1U << 11U,    ///< EM tracker: checksum, length, type or ring overflow
     kBoxFaultTrackerStale = 1U << 12U,     ///< EM tracker: a monitored source went quiet
     kBoxFaultPeriodOverrun = 1U << 13U,    ///< executive: main's timer skipped a period
+    /// executive / handle driver: received frames wait longer than a period: the period read its
+    /// cap (executive::kMaxFramesPerPeriod), read a frame that was queued before the previous
+    /// period ran, or the newest handle sample it read was older than a period (not fresh)
+    kBoxFaultReceiveBacklog = 1U << 14U,
 };
 
 /// BoxStatus.TrackerFaults: the EM tracker / tip force sensor (0 without a serial port).

@@ -1,10 +1,10 @@
 // socketcan_bus.cpp — see socketcan_bus.hpp.
 #include "hal/socketcan/socketcan_bus.hpp"
 
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
-#include <vector>
 
 #include <linux/can.h>
 #include <linux/can/error.h>
@@ -60,6 +60,29 @@ can_frame to_kernel(const CanFrame& frame) {
     return kernel;
 }
 
+/// The kernel's form of a filter: the id format and "no remote frame" are part of the match.
+can_filter to_kernel_filter(const CanIdFilter& filter) {
+    const canid_t width = filter.extended ? CAN_EFF_MASK : CAN_SFF_MASK;
+    return can_filter{(filter.id & width) | (filter.extended ? CAN_EFF_FLAG : 0U),
+                      (filter.mask & width) | CAN_EFF_FLAG | CAN_RTR_FLAG};
+}
+
+/// Sets CAN_RAW_FILTER; no filter = the kernel's default, one filter that passes every frame.
+bool set_kernel_filters(int socket, std::span<const CanIdFilter> filters) {
+    std::array<can_filter, kCanMaxReceiveFilters> kernel{};
+    std::size_t count = 0;
+    for (const CanIdFilter& filter : filters) {  // bound: kCanMaxReceiveFilters (checked)
+        kernel[count] = to_kernel_filter(filter);
+        ++count;
+    }
+    if (count == 0U) {
+        kernel[0] = can_filter{0U, 0U};
+        count = 1;
+    }
+    return setsockopt(socket, SOL_CAN_RAW, CAN_RAW_FILTER, kernel.data(),
+                      static_cast<socklen_t>(count * sizeof(can_filter))) == 0;
+}
+
 CanFrame from_kernel(const can_frame& kernel) {
     CanFrame frame{};
     frame.error = (kernel.can_id & CAN_ERR_FLAG) != 0U;
@@ -111,14 +134,20 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
         close();
         return false;
     }
-    std::vector<can_filter> filters;
-    for (const std::uint32_t id : config.receive_ids) {
-        filters.push_back(
-            can_filter{id & CAN_SFF_MASK, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+    if (config.receive_ids.size() > kCanMaxReceiveFilters) {
+        error =
+            where + ": at most " + std::to_string(kCanMaxReceiveFilters) + " receive identifiers";
+        close();
+        return false;
     }
-    if (!config.receive_ids.empty() &&
-        setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
-                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
+    std::array<CanIdFilter, kCanMaxReceiveFilters> filters{};
+    std::size_t count = 0;
+    for (const std::uint32_t id : config.receive_ids) {  // bound: kCanMaxReceiveFilters
+        filters[count] = CanIdFilter{id & CAN_SFF_MASK, kCanStandardIdMask, false};
+        ++count;
+    }
+    if (count > 0U &&
+        !set_kernel_filters(fd, std::span<const CanIdFilter>{filters.data(), count})) {
         error = where + ": " + system_reason("setsockopt(CAN_RAW_FILTER)");
         close();
         return false;
@@ -149,6 +178,17 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
         return false;
     }
     return true;
+}
+
+CanStatus SocketCanBus::set_receive_filter(std::span<const CanIdFilter> filters) {
+    if (filters.size() > kCanMaxReceiveFilters) {
+        return CanStatus::invalid;
+    }
+    if (socket_ < 0 || !set_kernel_filters(socket_, filters)) {
+        ++counters_.backend_errors;
+        return CanStatus::failed;
+    }
+    return CanStatus::ok;
 }
 
 CanStatus SocketCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {

@@ -70,6 +70,7 @@ int run_replay(const ReplayOptions& options) {
         s["kind"] = log.box_log ? "box_log" : "sensor_log";
         s["frames"] = log.records.size();
         s["frames_fed"] = r.frames_fed;
+        s["frames_filtered"] = r.frames_filtered;
         s["periods"] = r.periods;
         if (log.box_log) {
             s["compared_frames"] = r.compared_frames;
@@ -118,7 +119,9 @@ void add_replay_command(CLI::App& app) {
         "replays to different "
         "outputs, 2 invalid log (the line is named), 3 an output cannot be written. The log must "
         "be in time order (equal time stamps are fine) with no gap between two lines longer than "
-        "--max-gap-s.");
+        "--max-gap-s. Only the frames the box's receive filter passes (the handle sensors' 0x110 "
+        "and 0x111, and error frames) reach the box, as the kernel filters them for "
+        "scopekin-box; summary.json counts the rest as frames_filtered.");
     cmd->add_option("log", options->log, "candump log file")->required()->check(CLI::ExistingFile);
     cmd->add_option("--out", options->out,
                     "Output directory (created if missing; old outputs in it are replaced)")

@@ -4,6 +4,7 @@
 #include <deque>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <sstream>
 
 #include "executive/sensor_box.hpp"
@@ -13,9 +14,19 @@
 namespace scopekin::host_sim {
 namespace {
 
-/// A CAN bus that hands the box the log's frames and keeps what the box sends.
+/// A CAN bus that hands the box the log's frames and keeps what the box sends.  It holds back
+/// the frames the box's receive filter does not pass, as the kernel does for scopekin-box.
 class ReplayCanBus final : public hal::CanBus {
 public:
+    hal::CanStatus set_receive_filter(std::span<const hal::CanIdFilter> filters) override {
+        return filter_.assign(filters) ? hal::CanStatus::ok : hal::CanStatus::invalid;
+    }
+    /// Queues a frame of the log for the box; false if the box's filter holds it back.
+    bool offer(const hal::CandumpRecord& record) {
+        if (!filter_.passes(record.frame)) return false;
+        queue.push_back({record.frame, record.timestamp_us});
+        return true;
+    }
     hal::CanStatus send(const hal::CanFrame& frame, std::uint32_t /*timeout_us*/) override {
         sent.push_back(frame);
         ++counters_.sent;
@@ -35,6 +46,7 @@ public:
 
 private:
     hal::CanCounters counters_{};
+    hal::CanReceiveFilter filter_{};
 };
 
 bool compared_output(std::uint32_t id) {
@@ -172,8 +184,7 @@ ReplayResult replay_candump(const CandumpLog& log,
         while (i < n) {
             const hal::CandumpRecord& r = log.records[i];
             if (is_input(r)) {
-                bus->queue.push_back({r.frame, r.timestamp_us});
-                ++result.frames_fed;
+                ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
                 ++i;
                 continue;
             }
@@ -223,8 +234,7 @@ ReplayResult replay_candump(const CandumpLog& log,
             run(next);
             next += kBoxPeriodUs;
         }
-        bus->queue.push_back({r.frame, r.timestamp_us});
-        ++result.frames_fed;
+        ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
     }
     run(next);
     return result;

@@ -10,6 +10,9 @@
 //    overrun and bus counters, which a replay cannot have).
 //  * a sensor log (no 0x181): the handle sensors' frames only; the box runs every 5 ms from the
 //    first frame's time, each period after the frames stamped at or before it.
+// Either way the box gets only the frames its receive filter passes (the handle sensors' 0x110
+// and 0x111, and error frames: SensorBox sets the filter at init), as the kernel filters them
+// for scopekin-box; the rest are counted in ReplayResult::frames_filtered.
 // The reader takes a log only in time order: in a sensor log no time stamp may be earlier than
 // the line before it (equal is fine); in a box log the received frames and the box's own frames
 // are each in time order (the box's frames carry their period's time, taken before the period
@@ -57,7 +60,8 @@ CandumpLog read_candump_log(const std::string& path, const CandumpReadOptions& o
 
 struct ReplayResult {
     std::uint64_t periods = 0;
-    std::uint64_t frames_fed = 0;
+    std::uint64_t frames_fed = 0;       ///< frames given to the box
+    std::uint64_t frames_filtered = 0;  ///< frames its receive filter held back (foreign ids)
     std::uint64_t compared_frames = 0;  ///< box log: recorded output frames compared
     std::uint64_t differing_frames = 0;
     std::string first_difference;  ///< empty if none

@@ -69,6 +69,33 @@ hal::CanFrame encoder_frame(std::uint32_t k) {
     return protocol::encode(encoder);
 }
 
+/// Both handle sensors at 1 kHz for `ms` milliseconds, and `foreign_per_ms` frames of other
+/// identifiers (0x300..0x3FF, 8 bytes) each millisecond beside them.
+host_sim::CandumpLog sensor_log(std::uint32_t ms, std::uint32_t foreign_per_ms) {
+    host_sim::CandumpLog log;
+    auto add = [&log](std::uint64_t time_us, const hal::CanFrame& frame) {
+        hal::CandumpRecord record{};
+        record.timestamp_us = time_us;
+        record.frame = frame;
+        hal::set_candump_interface(record, "can0");
+        log.records.push_back(record);
+        log.lines.push_back(log.records.size());
+    };
+    for (std::uint32_t k = 0; k < ms; ++k) {
+        const std::uint64_t t = kStartUs + std::uint64_t{k} * 1000U;
+        add(t, encoder_frame(k));
+        add(t, force_frame(k));
+        for (std::uint32_t j = 0; j < foreign_per_ms; ++j) {
+            hal::CanFrame foreign{};
+            foreign.id = 0x300U + j % 0x100U;
+            foreign.length = 8;
+            foreign.data = {0x00, 0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77};
+            add(t, foreign);
+        }
+    }
+    return log;
+}
+
 /// The text of a refusal, and its line (0 if none was thrown).
 struct Refusal {
     std::size_t line = 0;
@@ -194,4 +221,39 @@ TEST(CandumpReplayReader, TheGapBoundIsDefaultSixtySecondsAndCanBeRaised) {
     const host_sim::CandumpLog log = host_sim::read_candump_log(path, raised);
     const host_sim::ReplayResult result = host_sim::replay_candump(log, nullptr);
     EXPECT_EQ(result.periods, (60'000'001U + 9000U) / 5000U + 1U);
+}
+
+TEST(CandumpReplay, AFloodOfForeignFramesChangesNoOutput) {
+    // 3 s of both handle sensors at 1 kHz, alone and beside 100 foreign frames per ms (the
+    // box reads at most 128 frames per period; the flood brings 500 per period).
+    const host_sim::CandumpLog clean = sensor_log(3000, 0);
+    const host_sim::CandumpLog flood = sensor_log(3000, 100);
+    std::vector<std::int32_t> clean_tip;
+    std::vector<std::uint32_t> clean_flags;
+    const host_sim::ReplayResult a =
+        host_sim::replay_candump(clean, [&](const scopekin::host_sim::BoxPeriod& p) {
+            clean_tip.push_back(p.outputs->tip_path_mm.raw());
+            clean_flags.push_back(p.outputs->fault_flags);
+        });
+    std::vector<std::int32_t> flood_tip;
+    std::vector<std::uint32_t> flood_flags;
+    const host_sim::ReplayResult b =
+        host_sim::replay_candump(flood, [&](const scopekin::host_sim::BoxPeriod& p) {
+            flood_tip.push_back(p.outputs->tip_path_mm.raw());
+            flood_flags.push_back(p.outputs->fault_flags);
+        });
+    ASSERT_EQ(a.periods, b.periods);
+    ASSERT_EQ(clean_tip.size(), flood_tip.size());
+    // The tip at 3 s: the handle moved 100 -> 250 mm; the estimate follows it (the same log
+    // without the flood is the reference).
+    const double tip_clean_mm = clean_tip.back() / 65536.0;
+    const double tip_flood_mm = flood_tip.back() / 65536.0;
+    EXPECT_GT(tip_clean_mm, 240.0);
+    // The filter holds the flood back before the box: every period's output is the same.
+    EXPECT_NEAR(tip_flood_mm, tip_clean_mm, 0.0) << "flood moved the tip estimate";
+    EXPECT_EQ(flood_tip, clean_tip);
+    EXPECT_EQ(flood_flags, clean_flags);
+    EXPECT_EQ(b.frames_fed, a.frames_fed);
+    EXPECT_EQ(b.frames_filtered, 3000U * 100U);
+    EXPECT_EQ(a.frames_filtered, 0U);
 }
