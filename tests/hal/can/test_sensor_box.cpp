@@ -3,8 +3,9 @@
 // frames and bus-off, garbage on the bus that must change nothing but counters (with the box's
 // receive filter and on a backend without one), a flood of foreign frames, more frames than a
 // period reads and the catch-up after a stall, receive-queue drops and period overruns (each
-// flagged within 3 periods, survived, cleared when the cause goes), and the test bench's EM
-// tracker samples reaching the estimator's input.
+// flagged within 3 periods, survived, cleared when the cause goes), the test bench's EM tracker
+// samples reaching the estimator's input, a saturated 921,600 bit/s tracker line read completely
+// every period, and a line of bytes with no sync flagged as a framing fault.
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -151,6 +152,10 @@ Bench bench_stall;
 Bench bench_short_stall;
 Bench bench_dropped;
 Bench bench_overrun;
+Bench bench_saturated;
+Bench bench_no_sync;
+hal::LoopbackSerialPort saturated_line{921600};
+hal::LoopbackSerialPort no_sync_line{921600};
 hal::LoopbackSerialPort tracker_line{};
 
 /// Writes one EM tracker frame of `message` into the line the box reads.
@@ -560,6 +565,159 @@ SCOPEKIN_TEST(SensorBox, PeriodOverrunsAreFlaggedAndClear) {
     SCOPEKIN_EXPECT_EQ(bench.box.counters().period_overruns, 3U);
 }
 
+namespace {
+
+/// The test bench's tracker as an endless byte stream: poses of sensors 0..3 and a tip force in
+/// turn (32 + 32 + 32 + 32 + 17 = 145 bytes a round), device time +1 ms per frame of a source.
+class TrackerStream {
+public:
+    /// The next `count` bytes of the stream into `out` (count <= out.size()).
+    void next(std::span<std::uint8_t> out) {
+        for (std::uint8_t& byte : out) {
+            if (offset_ == size_) refill();
+            byte = frame_[offset_++];
+        }
+    }
+    [[nodiscard]] std::uint32_t frames_started() const { return frames_; }
+
+private:
+    void refill() {
+        const std::uint32_t source = frames_ % 5U;
+        const std::uint32_t time_us = 1000U * (frames_ / 5U + 1U);
+        if (source < 4U) {
+            protocol::EmPoseMessage pose{};
+            pose.device_time_us = time_us;
+            pose.sensor_id = static_cast<std::uint8_t>(source);
+            pose.position_um = {1000 * static_cast<std::int32_t>(source), 2000, 3000};
+            pose.orientation_q14 = {16384, 0, 0, 0};
+            size_ = protocol::encode_em_pose(pose, frame_);
+        } else {
+            protocol::TipForceMessage force{};
+            force.device_time_us = time_us;
+            force.force_mN = {0, 0, 500};
+            size_ = protocol::encode_tip_force(force, frame_);
+        }
+        offset_ = 0;
+        ++frames_;
+    }
+
+    std::array<std::uint8_t, protocol::kEmTrackerMaxFrameSize> frame_{};
+    std::size_t size_{0};
+    std::size_t offset_{0};
+    std::uint32_t frames_{0};
+};
+
+/// Bytes a saturated 921,600 bit/s 8N1 line carries in `ms` milliseconds from the start:
+/// 92,160 bytes/s = 92.16 bytes/ms.
+std::size_t saturated_bytes(std::uint32_t ms) {
+    return static_cast<std::size_t>(std::uint64_t{ms} * 9216U / 100U);
+}
+
+TrackerStream saturated_stream{};
+TrackerStream no_sync_stream{};
+
+}  // namespace
+
+// A saturated 921,600 bit/s line: 461 bytes arrive every 5 ms period (the bench's sensors sending
+// back to back).  Every byte is read in the period it arrived, nothing is lost or discarded,
+// every frame becomes a valid sample, and the box raises no tracker fault.
+SCOPEKIN_TEST(SensorBox, ASaturated921600BaudLineIsReadCompletelyEveryPeriod) {
+    Bench& bench = bench_saturated;
+    hal::LoopbackSerialPort& line = saturated_line;
+    TrackerStream& stream = saturated_stream;
+    bench.start(&line);
+    std::array<std::uint8_t, 128> bytes{};
+    std::uint32_t ms = 0;
+    std::size_t offered = 0;  // bytes the line carried
+    std::size_t written = 0;  // ... and the ones the box's receive buffer took
+    std::uint32_t faulty_periods = 0;
+    std::uint32_t periods_behind = 0;
+    for (int k = 0; k < 200; ++k) {  // 1 s
+        for (int m = 0; m < 5; ++m) {
+            ++ms;
+            const std::size_t count = saturated_bytes(ms) - offered;  // 92 or 93
+            stream.next(std::span<std::uint8_t>{bytes.data(), count});
+            offered += count;
+            written += line.device_write(std::span<const std::uint8_t>{bytes.data(), count});
+        }
+        const Published out = bench.period();
+        SCOPEKIN_EXPECT_EQ(out.estimates, 1);
+        // Everything that arrived is read in this period.
+        periods_behind += line.counters().bytes_received == written ? 0U : 1U;
+        if (k > 0 && (bench.box.tracker_faults() != 0U ||
+                      (bench.box.box_faults() & messages::kBoxFaultSerialFraming) != 0U)) {
+            ++faulty_periods;
+        }
+    }
+    SCOPEKIN_EXPECT_EQ(periods_behind, 0U);
+    SCOPEKIN_EXPECT_EQ(offered, 92160U);  // the line's full second
+    SCOPEKIN_EXPECT_EQ(written, offered);
+    SCOPEKIN_EXPECT_EQ(line.counters().overruns, 0U);
+    SCOPEKIN_EXPECT_EQ(faulty_periods, 0U);
+    const auto counters = bench.box.em_tracker().counters();
+    // Every frame but the one still arriving is complete and valid.
+    SCOPEKIN_EXPECT_EQ(counters.link.frames_ok, stream.frames_started() - 1U);
+    SCOPEKIN_EXPECT_EQ(counters.poses_ok + counters.tip_forces_ok, stream.frames_started() - 1U);
+    SCOPEKIN_EXPECT_EQ(counters.link.bytes_discarded, 0U);
+    SCOPEKIN_EXPECT_EQ(counters.samples_dropped, 0U);
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_inputs().valid_mask, messages::kEmAllSources);
+}
+
+// A line that sends bytes but never a frame start (noise, a wrong baud rate): a framing fault in
+// TrackerFaults and DriverFaults within 3 periods (not only the stale bit after 100 ms); the box
+// keeps running; when frames come back the faults clear within 3 periods.
+SCOPEKIN_TEST(SensorBox, BytesWithNoSyncAreAFramingFaultWithinThreePeriods) {
+    Bench& bench = bench_no_sync;
+    hal::LoopbackSerialPort& line = no_sync_line;
+    TrackerStream& stream = no_sync_stream;
+    bench.start(&line);
+    std::array<std::uint8_t, 64> bytes{};
+    auto frames_for_a_period = [&]() {
+        for (int m = 0; m < 5; ++m) {  // 64 bytes a ms: a round of all five sources in 2.3 ms
+            stream.next(bytes);
+            (void)line.device_write(bytes);
+        }
+    };
+    for (int k = 0; k < 20; ++k) {
+        frames_for_a_period();
+        (void)bench.period();
+    }
+    SCOPEKIN_EXPECT_EQ(bench.box.tracker_faults(), 0U);
+    // Noise: bytes 0x00..0x7F, never the sync byte 0xA5, 64 per ms.  The stream's frame in
+    // progress is abandoned mid-way, as when a cable is swapped.
+    std::uint32_t seed = 99;
+    int flagged_after = 0;
+    for (int k = 1; k <= 10; ++k) {
+        for (int m = 0; m < 5; ++m) {
+            for (std::uint8_t& byte : bytes) {
+                seed = seed * 1664525U + 1013904223U;
+                byte = static_cast<std::uint8_t>((seed >> 24U) & 0x7FU);
+            }
+            (void)line.device_write(bytes);
+        }
+        const Published out = bench.period();
+        SCOPEKIN_EXPECT_EQ(out.estimates, 1);
+        const bool framing = (bench.box.tracker_faults() & messages::kTrackerFaultFraming) != 0U &&
+                             (bench.box.box_faults() & messages::kBoxFaultSerialFraming) != 0U;
+        if (flagged_after == 0 && framing) flagged_after = k;
+        if (flagged_after != 0) {
+            SCOPEKIN_EXPECT_TRUE(framing);  // for as long as the noise lasts
+        }
+    }
+    SCOPEKIN_EXPECT_TRUE(flagged_after >= 1 && flagged_after <= 3);
+    SCOPEKIN_EXPECT_EQ(bench.box.em_tracker().counters().link.frames_ok,
+                       bench.box.em_tracker().counters().poses_ok +
+                           bench.box.em_tracker().counters().tip_forces_ok);
+    // Frames again: the faults clear within 3 periods.
+    int cleared_after = 0;
+    for (int k = 1; k <= 3 && cleared_after == 0; ++k) {
+        frames_for_a_period();
+        (void)bench.period();
+        if (bench.box.tracker_faults() == 0U && bench.box.box_faults() == 0U) cleared_after = k;
+    }
+    SCOPEKIN_EXPECT_TRUE(cleared_after >= 1 && cleared_after <= 3);
+}
+
 SCOPEKIN_TEST(SensorBox, TrackerSamplesReachTheEstimatorInput) {
     Bench& bench = bench_tracker;
     bench.start(&tracker_line);
@@ -627,11 +785,13 @@ SCOPEKIN_TEST(BoxFaults, MappingsFollowTheDbc) {
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultDeviceStatus), kTrackerFaultDeviceStatus);
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultBadChecksum), kTrackerFaultFraming);
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultBufferOverflow), kTrackerFaultFraming);
+    SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultNoSync), kTrackerFaultFraming);
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultSerial), kTrackerFaultLink);
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(kEmFaultQueueOverflow), kTrackerFaultLink);
     SCOPEKIN_EXPECT_EQ(tracker_faults_of(0xFFFU), 0xFFU);
     // DriverFaults: framing and staleness of the tracker; its sample checks are not the box's.
     SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultUnknownType), kBoxFaultSerialFraming);
+    SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultNoSync), kBoxFaultSerialFraming);
     SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultStale), kBoxFaultTrackerStale);
     SCOPEKIN_EXPECT_EQ(box_faults_of_tracker(kEmFaultOutOfRange | kEmFaultSerial), 0U);
     // KineticEstimate: InputsStale for a held handle signal, DepthClamped for a limited depth.
