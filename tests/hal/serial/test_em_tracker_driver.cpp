@@ -1,7 +1,7 @@
 // EM tracker driver: conversions to mm / N (Q16.16), validation (unknown sensor, range,
-// quaternion norm, timestamps, device status), staleness and recovery, link and serial faults, bytes
-// with no sync, bounded reads, queue overflow, and a randomised hostile stream through a scripted
-// SerialPort.
+// quaternion norm, timestamps, device status), staleness and recovery, link and serial faults,
+// bytes with no sync, bounded reads, queue overflow, and a randomised hostile stream through a
+// scripted SerialPort.
 // Runs as GoogleTest on x86-64 / aarch64 and with portable_check's runner on Cortex-M4.
 #include <array>
 #include <cstddef>
