@@ -9,7 +9,8 @@
 //     delivered as CanFrame::error frames;
 //   * timestamps: the kernel's receive timestamp (SO_TIMESTAMP, CLOCK_REALTIME) converted to
 //     CLOCK_MONOTONIC, the clock the executive runs on, by the offset between the two clocks
-//     read at receive time (µs accuracy; immune to wall-clock steps between frames);
+//     read at receive time (µs accuracy), robust to a wall-clock step while frames wait in the
+//     socket (realtime_to_monotonic.hpp): the executive judges a sample's freshness by its age;
 //   * drops: SO_RXQ_OVFL — the kernel's count of frames dropped because the socket's receive
 //     buffer was full — is CanCounters::dropped;
 //   * send: non-blocking write; with a timeout, waits for room (POLLOUT) and tries once more.
@@ -24,6 +25,7 @@
 #include <string>
 
 #include "hal/can_bus.hpp"
+#include "hal/socketcan/realtime_to_monotonic.hpp"
 
 namespace scopekin::hal {
 
@@ -58,6 +60,7 @@ public:
 private:
     int socket_{-1};
     CanCounters counters_{};
+    RealtimeToMonotonic receive_clock_{};
 };
 
 }  // namespace scopekin::hal
