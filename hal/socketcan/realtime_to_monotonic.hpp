@@ -12,6 +12,10 @@
 // out newer by at most the step.  A stamp that maps into the future with both offsets is taken
 // as received now (age 0).  Slow changes of the offset (NTP slewing, at most 0.5 µs per ms) are
 // followed at every receive; a change above kStepUs between two receives counts as a step.
+// The mapped times never go back: the socket hands frames out in the order they arrived, so a
+// frame read after another is given at least that one's time (the two clock readings behind each
+// offset differ by a µs or so from one receive to the next, which would otherwise reorder two
+// frames stamped in the same µs — and `scopekin replay` refuses a record whose time goes back).
 //
 // Plain integer arithmetic, no system calls: the SocketCAN backend feeds it, the tests drive it.
 #pragma once
@@ -60,13 +64,19 @@ public:
                 best = before_step;
             }
         }
-        return best < 0 ? monotonic_now_us : static_cast<std::uint64_t>(best);
+        std::uint64_t mapped = best < 0 ? monotonic_now_us : static_cast<std::uint64_t>(best);
+        if (mapped < last_us_ && last_us_ <= monotonic_now_us) {
+            mapped = last_us_;
+        }
+        last_us_ = mapped;
+        return mapped;
     }
 
 private:
     std::int64_t offset_us_{0};
     std::int64_t previous_offset_us_{0};
     std::uint64_t step_at_us_{0};
+    std::uint64_t last_us_{0};  ///< the last time handed out
     bool has_offset_{false};
     bool has_previous_{false};
 };

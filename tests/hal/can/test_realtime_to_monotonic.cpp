@@ -1,8 +1,9 @@
 // The SocketCAN backend's mapping of the kernel's realtime receive stamps onto the monotonic
 // clock (hal/socketcan/realtime_to_monotonic.hpp): exact without a wall-clock step; a frame
 // stamped before a step, forward or backward, keeps its true receive time; after the step new
-// frames map exactly; the old offset is forgotten 1 s after the step.  Times in µs; the wall
-// clock runs at 1.7e9 s, the monotonic one at 1000 s.
+// frames map exactly; the old offset is forgotten 1 s after the step; the mapped times never go
+// back, whatever the jitter of the two clock readings.  Times in µs; the wall clock runs at
+// 1.7e9 s, the monotonic one at 1000 s.
 #include <cstdint>
 
 #include "hal/socketcan/realtime_to_monotonic.hpp"
@@ -72,4 +73,17 @@ SCOPEKIN_TEST(RealtimeToMonotonic, TheOffsetBeforeAStepIsForgottenAfterOneSecond
     const std::uint64_t later = kMonotonic0 + 1'101'000U;
     SCOPEKIN_EXPECT_EQ(clock.map(later - 3000U + kOffset + 2000U, later + kOffset + 2000U, later),
                        later - 3000U);
+}
+
+// Two frames stamped in the same µs, read one after the other; between the two receives the
+// realtime reading came out 2 µs late (the readings are not one instant): the second frame must
+// not be placed before the first.
+SCOPEKIN_TEST(RealtimeToMonotonic, TimesNeverGoBack) {
+    RealtimeToMonotonic clock{};
+    const std::uint64_t first = clock.map(kRealtime0, kRealtime0 + 100U, kMonotonic0 + 100U);
+    SCOPEKIN_EXPECT_EQ(first, kMonotonic0);
+    const std::uint64_t second = clock.map(kRealtime0, kRealtime0 + 112U, kMonotonic0 + 110U);
+    SCOPEKIN_EXPECT_EQ(second, kMonotonic0);  // not 2 µs before the first
+    const std::uint64_t third = clock.map(kRealtime0 + 10U, kRealtime0 + 110U, kMonotonic0 + 110U);
+    SCOPEKIN_EXPECT_EQ(third, kMonotonic0 + 10U);
 }
