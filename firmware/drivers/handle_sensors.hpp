@@ -23,8 +23,8 @@
 //
 // Staleness: a sensor whose last valid sample is older than `stale_after_us` is stale (its
 // BoxFault bit is set each period until a valid sample arrives; each onset counts one stale
-// event).  The estimator sees a signal as fresh only in the period a new valid sample arrived,
-// and holds its last value otherwise (kinetics.hpp "Bad input").
+// event).  The estimator holds its last value of a signal in every period it is not fresh
+// (kinetics.hpp "Bad input").
 #pragma once
 
 #include <array>

@@ -29,9 +29,11 @@
 // (3) found the newest handle sample older than a period (the driver holds it, not fresh: the
 // estimator never takes history for a live reading).  Each such period counts in
 // BoxCounters::backlog_periods (BoxCounters index receive_backlog on the wire), each frame of (2)
-// in late_frames.  A box that stalled (say 100 ms: 200 frames) thus reads its cap, holds its
-// inputs, flags the backlog, drains it over the next periods and clears the bit in the first
-// period that reads an empty queue's worth of fresh frames.
+// in late_frames.  A box that stalled (say 100 ms: 210 frames waiting) thus reads its cap, holds
+// its inputs and flags the backlog, reads the rest in the next period (still flagged: they
+// waited through a period) and clears the bit in the first period that finds only frames that
+// arrived since the one before.  A shorter stall whose frames fit the cap is a period overrun
+// (main's timer), not a backlog: its newest samples are fresh.
 //
 // Faults: a sensor that stops sending is flagged stale in the first period its last sample is
 // older than HandleSensorConfig::stale_after_us (default 3 periods); the kinetics holds its
