@@ -53,7 +53,7 @@ int run_replay(const ReplayOptions& options) {
     }
     try {
         const fs::path dir(options.out);
-        prepare_directory(dir, {"firmware.csv", "firmware.csv.part", "summary.json"});
+        prepare_directory(dir, {"summary.json", "firmware.csv", "firmware.incomplete.csv"});
         PartFile firmware_csv(dir / "firmware.csv", dir / "firmware.incomplete.csv");
         host_sim::BoxObserver observer(&firmware_csv.stream());
         if (!options.quiet)
