@@ -31,10 +31,11 @@ const std::array<const char*, 16>& box_fault_names() {
                                                    "serial_framing",
                                                    "tracker_stale",
                                                    "period_overrun",
-                                                   "bit_14",
+                                                   "receive_backlog",
                                                    "bit_15"};
     static_assert(messages::kBoxFaultCounterGap == 1U << 6U);
     static_assert(messages::kBoxFaultPeriodOverrun == 1U << 13U);
+    static_assert(messages::kBoxFaultReceiveBacklog == 1U << 14U);
     return names;
 }
 
@@ -70,12 +71,15 @@ void BoxObserver::observe(const BoxPeriod& period) {
         *csv_ << firmware_csv_row(period.time_us, o, period.box_faults, tracker_faults) << '\n';
     ++observation_.periods;
     const double t = static_cast<double>(period.time_us) * 1e-6;
+    // The box's fault times as firmware.csv prints time_s (the double nearest the microseconds:
+    // a candump log's epoch times stay exact in summary.json).
+    const double t_us_exact = static_cast<double>(period.time_us) / 1e6;
     for (std::size_t k = 0; k < observation_.box_fault_periods.size(); ++k)
         if ((period.box_faults & (1U << k)) != 0U && observation_.box_fault_periods[k]++ == 0)
-            observation_.box_fault_first_s[k] = t;
+            observation_.box_fault_first_s[k] = t_us_exact;
     for (std::size_t k = 0; k < observation_.tracker_fault_periods.size(); ++k)
         if ((tracker_faults & (1U << k)) != 0U && observation_.tracker_fault_periods[k]++ == 0)
-            observation_.tracker_fault_first_s[k] = t;
+            observation_.tracker_fault_first_s[k] = t_us_exact;
     if (period.box != nullptr) {
         const executive::SensorBox& box = *period.box;
         observation_.box_known = true;
@@ -166,7 +170,9 @@ nlohmann::ordered_json BoxObserver::box_section() const {
                        {"unknown_ids", c.unknown_ids},
                        {"frames_published", c.frames_published},
                        {"send_failures", c.send_failures},
-                       {"period_overruns", c.period_overruns}};
+                       {"period_overruns", c.period_overruns},
+                       {"backlog_periods", c.backlog_periods},
+                       {"late_frames", c.late_frames}};
     const drivers::HandleSensorCounters& h = b.handle_counters;
     out["handle_sensors"] = {{"force_torque_samples", h.force_torque_samples},
                              {"insertion_roll_samples", h.insertion_roll_samples},
@@ -174,7 +180,8 @@ nlohmann::ordered_json BoxObserver::box_section() const {
                              {"out_of_range", h.out_of_range},
                              {"sensor_status", h.sensor_status},
                              {"counter_gaps", h.counter_gaps},
-                             {"stale_events", h.stale_events}};
+                             {"stale_events", h.stale_events},
+                             {"late_samples", h.late_samples}};
     const drivers::EmTrackerDriverCounters& e = b.em_counters;
     out["em_tracker"] = {{"poses_ok", e.poses_ok},
                          {"tip_forces_ok", e.tip_forces_ok},

@@ -54,7 +54,7 @@ struct BoxObservation {
 /// Names of the kinetics fault bits (kinetics_io.hpp FaultFlag), bit k.
 const std::array<const char*, 14>& kinetics_fault_names();
 /// Names of the box's fault bits (messages/box_faults.hpp BoxFault, TrackerFault), bit k
-/// ("bit_14" for a bit without a name).
+/// ("bit_15" for a bit without a name).
 const std::array<const char*, 16>& box_fault_names();
 const std::array<const char*, 8>& tracker_fault_names();
 
