@@ -127,15 +127,15 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     return report;
 }
 
-void print_box_faults(const Json& box, const std::string& prefix) {
+void print_box_faults(const Json& box) {
     if (!box.is_object() || !box.contains("fault_first_s")) return;
     const auto periods_total = box["periods"].get<std::uint64_t>();
     for (const char* group : {"fault", "tracker_fault"}) {
-        const std::string kind = std::string(group) == "fault" ? "box fault" : "tracker fault";
+        const std::string kind = std::string(group) == "fault" ? "box fault " : "tracker fault ";
         for (const auto& [name, first] : box[std::string(group) + "_first_s"].items()) {
             const auto periods = box[std::string(group) + "_periods"][name].get<std::uint64_t>();
-            std::printf("%s  %8.3f s  %s %-20s first set; set in %llu of %llu periods (%.2f s)\n",
-                        prefix.c_str(), first.get<double>(), kind.c_str(), name.c_str(),
+            std::printf("  %8.3f s  %-31s first set; set in %llu of %llu periods (%.2f s)\n",
+                        first.get<double>(), (kind + name).c_str(),
                         static_cast<unsigned long long>(periods),
                         static_cast<unsigned long long>(periods_total),
                         static_cast<double>(periods) * host_sim::kBoxPeriodUs * 1e-6);
@@ -166,7 +166,7 @@ void print_run_tables(const LiveRunReport& report) {
                     static_cast<unsigned long long>(firmware["periods"].get<std::uint64_t>()),
                     static_cast<double>(periods) * host_sim::kBoxPeriodUs * 1e-6);
     }
-    print_box_faults(s["box"], "");
+    print_box_faults(s["box"]);
     std::printf("\nSummary:\n");
     std::printf("  %-40s %.2f s (%s)\n", "duration", s["duration_s"].get<double>(),
                 s["status"].get<std::string>().c_str());

@@ -38,8 +38,8 @@ LiveRunReport run_live_to_folder(const model::Scenario& scenario, const LiveRunO
 /// The alarm timeline and the summary table (stdout), as `demo` prints them.
 void print_run_tables(const LiveRunReport& report);
 
-/// One line per fault bit of the box a run saw (summary.json "box"): when first set, in how many
-/// periods; `prefix` starts each line.
-void print_box_faults(const nlohmann::ordered_json& box, const std::string& prefix);
+/// One line per fault bit of the box (BoxFault, TrackerFault) a run saw, from summary.json "box":
+/// when it was first set and in how many periods, as print_run_tables prints the estimator's.
+void print_box_faults(const nlohmann::ordered_json& box);
 
 }  // namespace scopekin::cli

@@ -94,7 +94,7 @@ int run_replay(const ReplayOptions& options) {
                         static_cast<unsigned long long>(r.differing_frames),
                         r.first_difference.empty() ? "" : "; first: ", r.first_difference.c_str());
         }
-        print_box_faults(s["box"], "");
+        print_box_faults(s["box"]);
         std::printf("wrote %s, %s\n", (dir / "firmware.csv").string().c_str(),
                     (dir / "summary.json").string().c_str());
         return log.box_log && (r.differing_frames != 0 || r.compared_frames == 0) ? 1 : 0;
@@ -111,8 +111,9 @@ void add_replay_command(CLI::App& app) {
     CLI::App* cmd = app.add_subcommand(
         "replay",
         "Feed a candump log (candump -L / canplayer format) through the unmodified firmware and "
-        "write DIR/firmware.csv "
-        "and DIR/summary.json. A log written by `scopekin-box --record` (it holds the box's own "
+        "write DIR/firmware.csv (the box's outputs and fault bits per period) and DIR/summary.json "
+        "(alarms, the box's faults and counters, e.g. counter_gaps). A log written by "
+        "`scopekin-box --record` (it holds the box's own "
         "frames) is replayed "
         "period by period at the recorded times, and the replayed KineticEstimate, ContactSummary, "
         "Alarms and "

@@ -94,7 +94,7 @@ int run_recording(const RunOptions& options) {
             rec.rows.size(), end_s, static_cast<unsigned long long>(loop.periods()),
             box["alarms"].size(), rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
             (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
-        print_box_faults(s["box"], "");
+        print_box_faults(s["box"]);
         return 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin run: " << e.what() << "\n";
@@ -110,8 +110,8 @@ void add_run_command(CLI::App& app) {
         "through the unmodified "
         "firmware: its rows become the CAN frames and serial bytes the box receives, at their "
         "times; the box runs "
-        "every 5 ms. Writes DIR/firmware.csv (the box's outputs per period) and DIR/summary.json "
-        "(alarms, gaps). A "
+        "every 5 ms. Writes DIR/firmware.csv (the box's outputs and fault bits per period) and "
+        "DIR/summary.json (alarms, gaps, the box's faults and counters). A "
         "malformed recording is refused with its line and column (exit 2); a gap in the handle "
         "signals is flagged, "
         "not refused. Exit status 0 done, 2 invalid recording, 3 an output cannot be written.");
