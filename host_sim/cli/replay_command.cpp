@@ -1,5 +1,6 @@
 #include "host_sim/cli/replay_command.hpp"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include "host_sim/cli/live_run.hpp"
 #include "host_sim/replay/candump_replay.hpp"
 #include "host_sim/simulator/box_observer.hpp"
+#include "protocol/can/scopekin_messages.hpp"
 
 namespace scopekin::cli {
 namespace {
@@ -40,6 +42,69 @@ const CLI::Validator kGapSeconds(
         return {};
     },
     "SECONDS in (0, 3600]");
+
+/// What the recorded box said about itself (a box log): the fault bits of its BoxStatus frames
+/// (sent every 20 periods and at once when a bit changes: frames with each bit set and the time
+/// of the first) and the last value of each BoxCounters index. These carry what a replay cannot
+/// reproduce: the live box's overruns, kernel drops and bus faults.
+Json recorded_box_state(const host_sim::CandumpLog& log) {
+    static constexpr std::array<const char*, protocol::kBoxCounterCount> kCounterNames{
+        "can_received",
+        "can_dropped",
+        "can_error_frames",
+        "can_bus_off",
+        "can_send_failures",
+        "bad_length",
+        "unknown_id",
+        "out_of_range",
+        "counter_gaps",
+        "stale_events",
+        "serial_frames",
+        "serial_bad_frames",
+        "serial_bytes_discarded",
+        "period_overruns",
+        "steps",
+        "sensor_status",
+        "receive_backlog"};
+    std::uint64_t status_frames = 0;
+    std::array<std::uint64_t, 16> driver_frames{};
+    std::array<std::uint64_t, 8> tracker_frames{};
+    Json driver_first = Json::object(), tracker_first = Json::object();
+    Json counters = Json::object();
+    std::uint8_t last_overruns = 0;
+    for (const hal::CandumpRecord& r : log.records) {
+        const double t = static_cast<double>(r.timestamp_us) / 1e6;
+        protocol::BoxStatus status;
+        protocol::BoxCounter counter;
+        if (protocol::decode(r.frame, status) == protocol::DecodeResult::ok) {
+            ++status_frames;
+            last_overruns = status.period_overruns;
+            for (std::size_t k = 0; k < driver_frames.size(); ++k)
+                if ((status.driver_faults & (1U << k)) != 0U && driver_frames[k]++ == 0)
+                    driver_first[host_sim::box_fault_names()[k]] = t;
+            for (std::size_t k = 0; k < tracker_frames.size(); ++k)
+                if ((status.tracker_faults & (1U << k)) != 0U && tracker_frames[k]++ == 0)
+                    tracker_first[host_sim::tracker_fault_names()[k]] = t;
+        } else if (protocol::decode(r.frame, counter) == protocol::DecodeResult::ok) {
+            const auto index = static_cast<std::size_t>(counter.index);
+            if (index < kCounterNames.size()) counters[kCounterNames[index]] = counter.value;
+        }
+    }
+    Json out;
+    out["status_frames"] = status_frames;
+    Json driver = Json::object(), tracker = Json::object();
+    for (std::size_t k = 0; k < driver_frames.size(); ++k)
+        if (driver_frames[k] > 0) driver[host_sim::box_fault_names()[k]] = driver_frames[k];
+    for (std::size_t k = 0; k < tracker_frames.size(); ++k)
+        if (tracker_frames[k] > 0) tracker[host_sim::tracker_fault_names()[k]] = tracker_frames[k];
+    out["fault_frames"] = driver;
+    out["fault_first_s"] = driver_first;
+    out["tracker_fault_frames"] = tracker;
+    out["tracker_fault_first_s"] = tracker_first;
+    out["period_overruns_last"] = last_overruns;
+    out["counters_last"] = counters;
+    return out;
+}
 
 int run_replay(const ReplayOptions& options) {
     const auto start = std::chrono::steady_clock::now();
@@ -82,6 +147,7 @@ int run_replay(const ReplayOptions& options) {
         s["alarms"] = box["alarms"];
         s["firmware"] = box;
         s["box"] = observer.box_section();
+        if (log.box_log) s["box"]["recorded"] = recorded_box_state(log);
         s["wall_time_s"] =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         s["files"] = {{"firmware", "firmware.csv"}};
@@ -95,6 +161,18 @@ int run_replay(const ReplayOptions& options) {
                         r.first_difference.empty() ? "" : "; first: ", r.first_difference.c_str());
         }
         print_box_faults(s["box"]);
+        if (log.box_log) {
+            const Json& recorded = s["box"]["recorded"];
+            for (const auto& [name, first] : recorded["fault_first_s"].items())
+                std::printf(
+                    "  %8.3f s  %-31s first set; in %llu of %llu recorded BoxStatus "
+                    "frames\n",
+                    first.get<double>(), ("recorded box fault " + name).c_str(),
+                    static_cast<unsigned long long>(
+                        recorded["fault_frames"][name].get<std::uint64_t>()),
+                    static_cast<unsigned long long>(
+                        recorded["status_frames"].get<std::uint64_t>()));
+        }
         std::printf("wrote %s, %s\n", (dir / "firmware.csv").string().c_str(),
                     (dir / "summary.json").string().c_str());
         return log.box_log && (r.differing_frames != 0 || r.compared_frames == 0) ? 1 : 0;
@@ -112,7 +190,8 @@ void add_replay_command(CLI::App& app) {
         "replay",
         "Feed a candump log (candump -L / canplayer format) through the unmodified firmware and "
         "write DIR/firmware.csv (the box's outputs and fault bits per period) and DIR/summary.json "
-        "(alarms, the box's faults and counters, e.g. counter_gaps). A log written by "
+        "(alarms, the box's faults and counters, e.g. counter_gaps; for a box log also the "
+        "recorded BoxStatus bits and BoxCounters values). A log written by "
         "`scopekin-box --record` (it holds the box's own "
         "frames) is replayed "
         "period by period at the recorded times, and the replayed KineticEstimate, ContactSummary, "

@@ -501,6 +501,35 @@ def check_box_faults():
     expect(sum(1 for r in fw if int(r.get("box_faults", "0")) & (1 << 14)) == counters.get("backlog_periods"),
            "firmware.csv's receive_backlog bit (1 << 14) in every backlog period")
     expect("receive_backlog" in p.stdout, f"replay prints the backlog: {p.stdout.strip()[-400:]}")
+    # A box log (scopekin-box --record) also carries what the live box said about itself, which a
+    # replay cannot reproduce (kernel drops, overruns): its BoxStatus bits and BoxCounters values
+    # are reported under box.recorded. Here BoxStatus has receive_dropped (bit 9) and
+    # period_overrun (bit 13) in periods 10..19 of 40, and BoxCounters says 19 frames dropped.
+    def stamp(us):
+        return f"({1700000000 + us // 1000000}.{us % 1000000:06d}) can0 "
+
+    box_lines = []
+    for k in range(40):
+        t = k * 5000
+        faults = (1 << 9) | (1 << 13) if 10 <= k < 20 else 0
+        overruns = 3 if k >= 10 else 0
+        box_lines.append(stamp(t + 100) + frame(k))
+        box_lines.append(stamp(t) + "181#0000000000000000")
+        box_lines.append(stamp(t) + "180#%02X01%04X%s%02X00" % (k & 0xFF, 0, faults.to_bytes(2, "little").hex().upper(),
+                                                             overruns))
+        box_lines.append(stamp(t) + "184#01000000%s" % (19 if k >= 20 else 0).to_bytes(4, "little").hex().upper())
+    box_log = os.path.join(d, "box.log")
+    write_lines(box_log, box_lines)
+    p = run("replay", box_log, "--out", os.path.join(d, "box"), "--quiet", expect_status=1)  # outputs differ
+    box = json.load(open(os.path.join(d, "box", "summary.json"))).get("box", {})
+    recorded = box.get("recorded", {})
+    expect(recorded.get("status_frames") == 40 and recorded.get("fault_frames") == {"receive_dropped": 10, "period_overrun": 10},
+           f"the recorded BoxStatus bits: {recorded}")
+    expect(recorded.get("fault_first_s", {}).get("receive_dropped") == 1700000000.05, f"first recorded drop: {recorded}")
+    expect(recorded.get("counters_last", {}).get("can_dropped") == 19 and recorded.get("period_overruns_last") == 3,
+           f"the recorded counters: {recorded}")
+    expect(box.get("fault_periods", {}).get("receive_dropped") == 0, "the replayed box itself dropped nothing")
+    expect("recorded box fault receive_dropped" in p.stdout, f"replay prints the recorded faults: {p.stdout[-400:]}")
     # run and simulate carry the same columns and section.
     rec = simulate_recording("box_faults_sim")
     sim_dir = os.path.dirname(rec)
