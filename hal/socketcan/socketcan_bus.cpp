@@ -91,7 +91,6 @@ void SocketCanBus::close() {
 bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
     close();
     counters_ = {};
-    receive_time_.reset();
     const std::string where = "CAN interface '" + config.interface + "'";
     if (config.interface.empty() || config.interface.size() >= IFNAMSIZ) {
         error = where + ": the name must have 1 to " + std::to_string(IFNAMSIZ - 1) + " characters";
@@ -214,9 +213,10 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
                     counters_.dropped = dropped;  // the kernel's running total for this socket
                 }
             }
+            const std::uint64_t age_us =
+                realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
             received.frame = from_kernel(kernel);
-            received.timestamp_us =
-                receive_time_.to_monotonic(stamp_realtime, realtime_now, monotonic_now);
+            received.timestamp_us = monotonic_now > age_us ? monotonic_now - age_us : 0U;
             count_received_frame(counters_, received.frame);
             return CanStatus::ok;
         }

@@ -6,9 +6,7 @@
 //     delivered as CanFrame::error frames;
 //   * timestamps: the kernel's receive timestamp (SO_TIMESTAMP, CLOCK_REALTIME) converted to
 //     CLOCK_MONOTONIC, the clock the executive runs on, by the offset between the two clocks
-//     read at receive time (µs accuracy), and by the offset from before a wall-clock step for
-//     the frames that waited in the socket across it (hal/linux/kernel_timestamp.hpp): the
-//     timestamps never go backwards and never lie by the step;
+//     read at receive time (µs accuracy; immune to wall-clock steps between frames);
 //   * drops: SO_RXQ_OVFL — the kernel's count of frames dropped because the socket's receive
 //     buffer was full — is CanCounters::dropped;
 //   * send: non-blocking write; with a timeout, waits for room (POLLOUT) and tries once more.
@@ -23,7 +21,6 @@
 #include <string>
 
 #include "hal/can_bus.hpp"
-#include "hal/linux/kernel_timestamp.hpp"
 
 namespace scopekin::hal {
 
@@ -55,7 +52,6 @@ public:
 private:
     int socket_{-1};
     CanCounters counters_{};
-    RealtimeStampConverter receive_time_{};
 };
 
 }  // namespace scopekin::hal
