@@ -1,5 +1,5 @@
 // can_bus.hpp — the CAN bus as the firmware sees it: classic frames (0..8 bytes), 11- or 29-bit
-// identifiers, send with a timeout, receive with a timestamp, counters.
+// identifiers, send with a timeout, receive with a timestamp, receive filters, counters.
 //
 // Backends: hal/socketcan (Linux CAN_RAW), hal/loopback (in memory, simulated time),
 // on bare metal too (mps2-an386 has no CAN controller, so the loopback wire stands in for one).
@@ -10,7 +10,9 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <span>
 
 namespace scopekin::hal {
 
@@ -68,6 +70,57 @@ struct CanCounters {
     std::uint32_t backend_errors{0};  ///< unexpected errors of the backend (errno etc.)
 };
 
+/// One receive filter, with the meaning of Linux's CAN_RAW_FILTER: a data frame passes if its
+/// identifier format is the filter's (`extended`) and (frame.id & mask) == (id & mask).  A remote
+/// frame never passes a filter.  Error frames are not data frames: no filter ever holds them back
+/// (the controller's reports always reach the box, as CAN_RAW_ERR_FILTER keeps them on Linux).
+struct CanIdFilter {
+    std::uint32_t id{0};
+    std::uint32_t mask{kCanStandardIdMask};  ///< kCanStandardIdMask: exactly this 11-bit id
+    bool extended{false};
+};
+
+/// Filters one receiver holds at most (a controller's acceptance filter banks are few).
+inline constexpr std::size_t kCanMaxReceiveFilters = 8;
+
+/// A receiver's filter set (fixed capacity, no heap).  No filter (count 0): every frame passes.
+struct CanReceiveFilter {
+    std::array<CanIdFilter, kCanMaxReceiveFilters> filters{};
+    std::size_t count{0};
+
+    /// False (and nothing changed) if there are more than kCanMaxReceiveFilters.
+    constexpr bool assign(std::span<const CanIdFilter> wanted) {
+        if (wanted.size() > kCanMaxReceiveFilters) {
+            return false;
+        }
+        count = 0;
+        for (const CanIdFilter& filter : wanted) {  // bound: kCanMaxReceiveFilters
+            filters[count] = filter;
+            ++count;
+        }
+        return true;
+    }
+
+    /// True if `frame` reaches the receiver (see CanIdFilter).
+    [[nodiscard]] constexpr bool passes(const CanFrame& frame) const {
+        if (frame.error || count == 0U) {
+            return true;
+        }
+        if (frame.remote) {
+            return false;
+        }
+        const std::uint32_t width = frame.extended ? kCanExtendedIdMask : kCanStandardIdMask;
+        for (std::size_t i = 0; i < count && i < kCanMaxReceiveFilters; ++i) {  // bound: 8
+            const CanIdFilter& filter = filters[i];
+            const std::uint32_t mask = filter.mask & width;
+            if (filter.extended == frame.extended && (frame.id & mask) == (filter.id & mask)) {
+                return true;
+            }
+        }
+        return false;
+    }
+};
+
 class CanBus {
 public:
     /// Queues `frame` for sending, waiting at most `timeout_us` for room.
@@ -75,6 +128,16 @@ public:
     /// Takes the next received frame (data or error frame), waiting at most `timeout_us`.
     virtual CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) = 0;
     [[nodiscard]] virtual CanCounters counters() const = 0;
+    /// From now on only data frames that pass one of `filters` (CanIdFilter) are received; an
+    /// empty span receives every frame.  Frames already queued stay queued.  Frames held back
+    /// are never counted (not received, not dropped), as a kernel or controller filter drops them
+    /// before any queue.  Returns ok if the backend filters as asked; invalid for more than
+    /// kCanMaxReceiveFilters filters; failed if it cannot filter: it then receives every frame
+    /// (the default, for a backend without filters).
+    virtual CanStatus set_receive_filter(std::span<const CanIdFilter> filters) {
+        (void)filters;
+        return CanStatus::failed;
+    }
 
 protected:
     CanBus() = default;

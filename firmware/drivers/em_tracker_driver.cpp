@@ -127,6 +127,9 @@ void EmTrackerDriver::note_link_faults(const protocol::EmTrackerFramerCounters& 
     if (after.buffer_overflows != before.buffer_overflows) {
         event_flags_ |= kEmFaultBufferOverflow;
     }
+    if (after.bytes_discarded != before.bytes_discarded) {
+        event_flags_ |= kEmFaultNoSync;
+    }
 }
 
 bool EmTrackerDriver::handle_frame(const protocol::EmTrackerFrame& frame,

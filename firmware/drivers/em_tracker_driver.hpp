@@ -9,7 +9,8 @@
 // Validation per sample: unknown sensor id, position/force out of range, quaternion not unit,
 // device time not increasing, device status.  Per source (4 sensors + tip force): staleness
 // (no valid sample within a timeout).  Link level (from the framer): bad checksum, bad length,
-// unknown message type, buffer overflow; serial port closed/failed.  Every fault kind has a bit
+// unknown message type, buffer overflow, bytes discarded while looking for a frame start (noise,
+// a line with no sync); serial port closed/failed.  Every fault kind has a bit
 // flag (EmTrackerFault) and a counter (EmTrackerDriverCounters).  The spec's §4 lists the degraded
 // behaviour of each.
 //
@@ -24,7 +25,8 @@
 //   quaternion norm check: w² + x² + y² + z² of the Q2.14 integers, exact in int64 at 2^-28
 //     (each square <= 2^30, the sum <= 2^32), compared with 1 ± tolerance (tolerance Q16.16 << 12).
 //
-// Storage: fixed (a 256-byte framer ring, a kSampleQueueCapacity-sample queue, per-source state);
+// Storage: fixed (a 256-byte framer ring, a kSampleQueueCapacity-sample queue, per-source state,
+// a kReadChunkBytes buffer on the stack of service());
 // no heap, no exceptions; every loop is bounded by a compile-time constant or by the length of
 // the caller's span (receive()).  Firmware rules (cmake/firmware_flags.cmake).
 #pragma once
@@ -90,21 +92,30 @@ struct EmTrackerServiceResult {
 
 class EmTrackerDriver {
 public:
-    /// Bytes per SerialPort::read() call and reads per service(): at most 256 bytes per call,
-    /// 22 ms of a saturated 115200 bit/s 8N1 line (59 ms at the bench's 4350 byte/s), so calling
-    /// service() every period of an executive running at 50 Hz or faster keeps up with anything
-    /// the line can carry.
-    static constexpr std::size_t kReadChunkBytes = 64;
-    static constexpr std::size_t kReadsPerService = 4;
-    /// Samples held until pop(); one service() completes at most 16 frames (256 new bytes plus a
+    /// Bytes per SerialPort::read() call and reads per service(): service() reads until the port
+    /// has no more (a short read) or kMaxBytesPerService = 1024 bytes are in.  Sized from the
+    /// fastest line the bench uses: 921,600 bit/s 8N1 carries 92,160 bytes/s, 460.8 bytes per
+    /// 5 ms period, so one service reads a saturated line completely at any period up to 11.1 ms
+    /// (2.2 times a 5 ms period's bytes: a late period is caught up by the next), and a 115,200
+    /// bit/s line (11,520 bytes/s) at any period up to 88 ms.  A chunk plus a partial frame fits
+    /// the framer's ring (128 + 31 <= 256), so receive() never overflows it.
+    static constexpr std::size_t kReadChunkBytes = 128;
+    static constexpr std::size_t kReadsPerService = 8;
+    static constexpr std::size_t kMaxBytesPerService = kReadChunkBytes * kReadsPerService;
+    /// Samples held until pop(); one service() completes at most 62 frames (1024 new bytes plus a
     /// partial frame of at most 31 from the previous call, 17-byte smallest frame), so a consumer
     /// that drains the queue after every service() never loses one.
-    static constexpr std::size_t kSampleQueueCapacity = 32;
+    static constexpr std::size_t kSampleQueueCapacity = 64;
+    static_assert(kReadChunkBytes + protocol::kEmTrackerMaxFrameSize - 1U <=
+                  protocol::kEmTrackerFramerCapacity);
+    static_assert((kMaxBytesPerService + protocol::kEmTrackerMaxFrameSize - 1U) /
+                      protocol::kEmTrackerMinFrameSize <=
+                  kSampleQueueCapacity);
 
     explicit EmTrackerDriver(const EmTrackerDriverConfig& config = {}) noexcept;
 
-    /// Reads what the port has (timeout 0, at most kReadsPerService * kReadChunkBytes bytes),
-    /// turns the frames into queued samples stamped `now_us`, then poll(now_us).
+    /// Reads what the port has (timeout 0, at most kMaxBytesPerService bytes), turns the frames
+    /// into queued samples stamped `now_us`, then poll(now_us).
     EmTrackerServiceResult service(SerialPort& port, std::uint64_t now_us) noexcept;
     /// The same, stamped with clock.now_us() (read once, before the first read).
     EmTrackerServiceResult service(SerialPort& port, const MonotonicClock& clock) noexcept;

@@ -101,6 +101,21 @@ void HandleSensors::update_staleness(Channel& channel, std::uint64_t now_us,
     }
 }
 
+bool HandleSensors::take_fresh(Channel& channel, std::uint64_t now_us) {
+    if (!channel.fresh) {
+        return false;
+    }
+    channel.fresh = false;
+    // A receive time after `now_us` (clock domains differ by a few µs) counts as age 0.
+    const bool late = now_us > channel.last_sample_us &&
+                      now_us - channel.last_sample_us > config_.max_sample_age_us;
+    if (late) {
+        ++counters_.late_samples;
+        faults_ |= kBoxFaultReceiveBacklog;
+    }
+    return !late;
+}
+
 HandleSamples HandleSensors::take_samples(std::uint64_t now_us) {
     faults_ = pending_faults_;
     pending_faults_ = 0;
@@ -110,10 +125,8 @@ HandleSamples HandleSensors::take_samples(std::uint64_t now_us) {
     HandleSamples samples{};
     samples.force_torque = force_torque_sample_;
     samples.insertion_roll = insertion_roll_sample_;
-    samples.force_torque_fresh = force_torque_.fresh;
-    samples.insertion_roll_fresh = insertion_roll_.fresh;
-    force_torque_.fresh = false;
-    insertion_roll_.fresh = false;
+    samples.force_torque_fresh = take_fresh(force_torque_, now_us);
+    samples.insertion_roll_fresh = take_fresh(insertion_roll_, now_us);
     return samples;
 }
 

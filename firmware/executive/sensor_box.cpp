@@ -26,7 +26,12 @@ bool SensorBox::init(const BoxConfig& config, hal::CanBus& can, hal::SerialPort*
     if (config_.status_every_periods == 0U) config_.status_every_periods = 1;
     config_.kinetics.period_s =
         Q16_16::from_ratio(static_cast<std::int32_t>(config_.period_us), 1000000);
+    config_.handle_sensors.max_sample_age_us = config_.period_us;
     can_ = &can;
+    receive_filtered_ =
+        can.set_receive_filter(drivers::kHandleSensorReceiveFilters) == hal::CanStatus::ok;
+    has_last_period_ = false;
+    last_period_us_ = 0;
     serial_ = serial;
     handle_sensors_ = drivers::HandleSensors{config_.handle_sensors};
     em_tracker_ = drivers::EmTrackerDriver{config_.em_tracker};
@@ -38,13 +43,22 @@ bool SensorBox::init(const BoxConfig& config, hal::CanBus& can, hal::SerialPort*
     return estimator_ok_;
 }
 
-void SensorBox::read_can() {
-    for (std::uint16_t n = 0; n < kMaxFramesPerPeriod; ++n) {  // bound: kMaxFramesPerPeriod
+void SensorBox::read_can(std::uint64_t now_us) {
+    std::uint16_t read = 0;
+    bool backlog = false;
+    for (; read < kMaxFramesPerPeriod; ++read) {  // bound: kMaxFramesPerPeriod
         hal::ReceivedCanFrame received{};
         if (can_->receive(received, 0) != hal::CanStatus::ok) {
             break;
         }
         ++counters_.frames_read;
+        // Queued before the previous period ran, and more than a period ago: it waited.
+        const std::uint64_t stamp = received.timestamp_us;
+        if (has_last_period_ && stamp < last_period_us_ && now_us > stamp &&
+            now_us - stamp > config_.period_us) {
+            ++counters_.late_frames;
+            backlog = true;
+        }
         if (received.frame.error) {
             can_health_.on_error_frame(received.frame);
             period_faults_ |= kBoxFaultCanErrorFrame;
@@ -54,6 +68,9 @@ void SensorBox::read_can() {
             ++counters_.unknown_ids;
             period_faults_ |= kBoxFaultUnknownId;
         }
+    }
+    if (read == kMaxFramesPerPeriod || backlog) {
+        period_faults_ |= kBoxFaultReceiveBacklog;  // counted with the driver's late samples
     }
     const std::uint32_t dropped = can_->counters().dropped;
     if (dropped != last_can_dropped_) {
@@ -98,12 +115,17 @@ void SensorBox::run_period(std::uint64_t now_us, std::uint32_t period_overruns) 
     }
 
     // read
-    read_can();
+    read_can(now_us);
     if (serial_ != nullptr) {
         read_serial(now_us);
     }
     const kinetics::Inputs inputs = assemble_inputs(handle_sensors_.take_samples(now_us), tracker_);
     period_faults_ |= handle_sensors_.faults();
+    if ((period_faults_ & kBoxFaultReceiveBacklog) != 0U) {
+        ++counters_.backlog_periods;
+    }
+    last_period_us_ = now_us;
+    has_last_period_ = true;
     if (can_health_.state() == protocol::CanState::bus_off) {
         period_faults_ |= kBoxFaultBusOff;
     }
@@ -243,6 +265,7 @@ std::uint32_t SensorBox::counter_value(protocol::BoxCounterIndex index) const {
         case protocol::BoxCounterIndex::period_overruns: return counters_.period_overruns;
         case protocol::BoxCounterIndex::steps: return counters_.periods;
         case protocol::BoxCounterIndex::sensor_status: return handle.sensor_status;
+        case protocol::BoxCounterIndex::receive_backlog: return counters_.backlog_periods;
     }
     return 0;
 }

@@ -16,6 +16,25 @@
 // the clock and calls run_period() at each release.  No heap, no exceptions; all state is in the
 // object, which `main` keeps in static storage.
 //
+// Receive filter: init() asks the CAN backend to pass only the handle sensors' identifiers
+// (drivers::kHandleSensorReceiveFilters) and error frames; SocketCAN does it in the kernel, the
+// loopback wire and `scopekin replay` in software, so a flood of foreign frames never reaches the
+// queue the box reads.  On a backend that cannot filter (receive_filtered() false) every frame
+// is read and the foreign ones are counted (unknown_ids, kBoxFaultUnknownId).
+//
+// Backlog: frames that wait in the receive queue for longer than a period are flagged
+// (kBoxFaultReceiveBacklog) in every period that (1) read its cap of kMaxFramesPerPeriod frames
+// (more may be waiting), or (2) read a frame received before the previous period ran and more
+// than a period before this one (it waited through a period: a backlog being drained), or
+// (3) found the newest handle sample older than a period (the driver holds it, not fresh: the
+// estimator never takes history for a live reading).  Each such period counts in
+// BoxCounters::backlog_periods (BoxCounters index receive_backlog on the wire), each frame of (2)
+// in late_frames.  A box that stalled (say 100 ms: 210 frames waiting) thus reads its cap, holds
+// its inputs and flags the backlog, reads the rest in the next period (still flagged: they
+// waited through a period) and clears the bit in the first period that finds only frames that
+// arrived since the one before.  A shorter stall whose frames fit the cap is a period overrun
+// (main's timer), not a backlog: its newest samples are fresh.
+//
 // Faults: a sensor that stops sending is flagged stale in the first period its last sample is
 // older than HandleSensorConfig::stale_after_us (default 3 periods); the kinetics holds its
 // last value and sets its own stale flag in every period without a fresh sample, so the next
@@ -59,6 +78,8 @@ struct BoxCounters {
     std::uint32_t frames_published{0};
     std::uint32_t send_failures{0};
     std::uint32_t period_overruns{0};  ///< as reported by main's timer
+    std::uint32_t backlog_periods{0};  ///< periods with kBoxFaultReceiveBacklog
+    std::uint32_t late_frames{0};      ///< frames that waited in the queue through a period
 };
 
 class SensorBox {
@@ -85,9 +106,11 @@ public:
     /// Fault bits of the last period (messages::BoxFault; BoxStatus.DriverFaults on the wire).
     [[nodiscard]] std::uint16_t box_faults() const { return box_faults_; }
     [[nodiscard]] protocol::BoxState box_state() const { return box_state_; }
+    /// True if the CAN backend took the receive filter at init (false: it passes every frame).
+    [[nodiscard]] bool receive_filtered() const { return receive_filtered_; }
 
 private:
-    void read_can();
+    void read_can(std::uint64_t now_us);
     void read_serial(std::uint64_t now_us);
     void publish(const hal::CanFrame& frame);
     void publish_outputs();
@@ -98,6 +121,9 @@ private:
     hal::CanBus* can_{nullptr};
     hal::SerialPort* serial_{nullptr};
     bool estimator_ok_{false};
+    bool receive_filtered_{false};
+    bool has_last_period_{false};
+    std::uint64_t last_period_us_{0};  ///< now_us of the previous period
     kinetics::State kinetics_{};
     kinetics::Outputs outputs_{};
     drivers::HandleSensors handle_sensors_{};

@@ -29,9 +29,13 @@ enum BoxFault : std::uint16_t {
     kBoxFaultBusOff = 1U << 8U,            ///< executive: the controller is bus-off
     kBoxFaultReceiveDropped = 1U << 9U,    ///< executive: the CAN backend dropped received frames
     kBoxFaultSendFailed = 1U << 10U,       ///< executive: a frame could not be sent
-    kBoxFaultSerialFraming = 1U << 11U,    ///< EM tracker: checksum, length, type or ring overflow
-    kBoxFaultTrackerStale = 1U << 12U,     ///< EM tracker: a monitored source went quiet
-    kBoxFaultPeriodOverrun = 1U << 13U,    ///< executive: main's timer skipped a period
+    kBoxFaultSerialFraming = 1U << 11U,  ///< EM tracker: checksum, length, type, no sync, overflow
+    kBoxFaultTrackerStale = 1U << 12U,   ///< EM tracker: a monitored source went quiet
+    kBoxFaultPeriodOverrun = 1U << 13U,  ///< executive: main's timer skipped a period
+    /// executive / handle driver: received frames wait longer than a period: the period read its
+    /// cap (executive::kMaxFramesPerPeriod), read a frame that was queued before the previous
+    /// period ran, or the newest handle sample it read was older than a period (not fresh)
+    kBoxFaultReceiveBacklog = 1U << 14U,
 };
 
 /// BoxStatus.TrackerFaults: the EM tracker / tip force sensor (0 without a serial port).
@@ -42,7 +46,7 @@ enum TrackerFault : std::uint8_t {
     kTrackerFaultDeviceTime = 1U << 3U,
     kTrackerFaultUnknownSensor = 1U << 4U,
     kTrackerFaultDeviceStatus = 1U << 5U,
-    kTrackerFaultFraming = 1U << 6U,  ///< checksum, length, type or framer ring overflow
+    kTrackerFaultFraming = 1U << 6U,  ///< checksum, length, type, no sync or ring overflow
     kTrackerFaultLink = 1U << 7U,     ///< serial port closed or failed, or sample queue overflow
 };
 
@@ -55,8 +59,9 @@ enum TrackerFault : std::uint8_t {
     static_assert(kSame == (kTrackerFaultStale | kTrackerFaultOutOfRange |
                             kTrackerFaultQuaternionNorm | kTrackerFaultDeviceTime |
                             kTrackerFaultUnknownSensor | kTrackerFaultDeviceStatus));
-    constexpr std::uint32_t kFraming =
-        kEmFaultBadChecksum | kEmFaultBadLength | kEmFaultUnknownType | kEmFaultBufferOverflow;
+    constexpr std::uint32_t kFraming = kEmFaultBadChecksum | kEmFaultBadLength |
+                                       kEmFaultUnknownType | kEmFaultBufferOverflow |
+                                       kEmFaultNoSync;
     constexpr std::uint32_t kLink = kEmFaultSerial | kEmFaultQueueOverflow;
     std::uint32_t faults = em_flags & kSame;
     if ((em_flags & kFraming) != 0U) faults |= kTrackerFaultFraming;

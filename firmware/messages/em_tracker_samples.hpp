@@ -54,6 +54,8 @@ enum EmTrackerFault : std::uint32_t {
     kEmFaultBufferOverflow = 1U << 9U,  ///< framer ring could not take the bytes
     kEmFaultSerial = 1U << 10U,         ///< serial port closed or failed
     kEmFaultQueueOverflow = 1U << 11U,  ///< sample queue full: the oldest sample was dropped
+    kEmFaultNoSync = 1U << 12U,  ///< framer: bytes discarded, not part of any valid frame (noise,
+                                 ///< a line with no sync, the rest of a rejected frame)
 };
 
 /// Faults that make a sample unusable (any of them set: the sample is delivered but does not

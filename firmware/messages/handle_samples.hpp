@@ -31,7 +31,9 @@ struct InsertionRollSample {
 };
 
 /// The handle sensors as one period sees them: the held (latest valid) sample of each sensor —
-/// all zero before its first — and whether a new valid one arrived since the last period.
+/// all zero before its first — and whether it is fresh: new since the last period and received
+/// at most one period before this one (drivers/handle_sensors.hpp: a sample read late from a
+/// backlog is held, not fresh).
 struct HandleSamples {
     ForceTorqueSample force_torque{};
     InsertionRollSample insertion_roll{};

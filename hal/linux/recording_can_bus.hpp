@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <span>
 #include <string>
 
 #include "hal/can_bus.hpp"
@@ -42,6 +43,10 @@ public:
     }
     CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) override;
     [[nodiscard]] CanCounters counters() const override { return bus_->counters(); }
+    /// Passed on: the record holds what passed the filter (what the box received).
+    CanStatus set_receive_filter(std::span<const CanIdFilter> filters) override {
+        return bus_->set_receive_filter(filters);
+    }
 
     [[nodiscard]] std::uint64_t lines_written() const { return lines_; }
     [[nodiscard]] std::uint64_t write_errors() const { return write_errors_; }

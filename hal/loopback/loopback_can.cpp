@@ -22,7 +22,10 @@ CanStatus LoopbackCanEndpoint::send(const CanFrame& frame, std::uint32_t /*timeo
         ++counters_.send_failures;
         return CanStatus::bus_off;
     }
-    if (!push(*outgoing_, frame)) {
+    if (peer_ != nullptr && !peer_->filter_.passes(frame)) {
+        // On a real bus the frame leaves; the receiver's filter drops it before any queue.
+        ++peer_->filtered_;
+    } else if (!push(*outgoing_, frame)) {
         // On a real bus the frame leaves; the receiver's buffer overflows.  Same here.
         if (peer_ != nullptr) {
             ++peer_->counters_.dropped;
@@ -30,6 +33,13 @@ CanStatus LoopbackCanEndpoint::send(const CanFrame& frame, std::uint32_t /*timeo
     }
     ++counters_.sent;
     return CanStatus::ok;
+}
+
+CanStatus LoopbackCanEndpoint::set_receive_filter(std::span<const CanIdFilter> filters) {
+    if (!filtering_supported_) {
+        return CanStatus::failed;
+    }
+    return filter_.assign(filters) ? CanStatus::ok : CanStatus::invalid;
 }
 
 CanStatus LoopbackCanEndpoint::receive(ReceivedCanFrame& received, std::uint32_t /*timeout_us*/) {

@@ -7,11 +7,17 @@
 // counted as `dropped` at the receiving endpoint, as a kernel socket buffer overflow would be.
 // Error frames can be injected (inject_error) to exercise bus-off and error handling; a
 // bus-off state set with set_bus_off() makes send() return bus_off until cleared.
+// Receive filters (set_receive_filter) work as the kernel's CAN_RAW_FILTER: a data frame that
+// passes none of the receiving endpoint's filters leaves the wire (the sender counts it sent)
+// but never enters that endpoint's queue, so it is neither received nor dropped there (counted
+// in filtered() only); error frames are never filtered.  set_filtering_supported(false) makes an
+// endpoint refuse filters, as a backend without them: every frame is then received.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 
 #include "hal/can_bus.hpp"
 #include "hal/clock.hpp"
@@ -36,6 +42,7 @@ public:
     CanStatus send(const CanFrame& frame, std::uint32_t timeout_us) override;
     CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) override;
     [[nodiscard]] CanCounters counters() const override;
+    CanStatus set_receive_filter(std::span<const CanIdFilter> filters) override;
 
     /// Queues an error frame (classes = CanErrorClass bits, data as a controller gives it) for
     /// this endpoint to receive.
@@ -46,6 +53,16 @@ public:
     [[nodiscard]] std::size_t pending() const { return incoming_->count; }
     /// The endpoint at the other end, told of frames lost in its incoming queue.
     void connect(LoopbackCanEndpoint& peer) { peer_ = &peer; }
+    /// Data frames held back by this endpoint's receive filter (never queued here).
+    [[nodiscard]] std::uint32_t filtered() const { return filtered_; }
+    /// false: set_receive_filter() refuses (failed) and clears the filter — a backend without
+    /// filters, on which the box receives every frame.  Default true.
+    void set_filtering_supported(bool supported) {
+        filtering_supported_ = supported;
+        if (!supported) {
+            filter_ = CanReceiveFilter{};
+        }
+    }
 
 private:
     bool push(LoopbackCanQueue& queue, const CanFrame& frame);
@@ -55,7 +72,10 @@ private:
     LoopbackCanQueue* incoming_;
     LoopbackCanEndpoint* peer_{nullptr};
     CanCounters counters_{};
+    CanReceiveFilter filter_{};
+    std::uint32_t filtered_{0};
     bool bus_off_{false};
+    bool filtering_supported_{true};
 };
 
 /// The wire: both queues and both endpoints (`box` and `world`).  Large (2 x 1024 frames): keep

@@ -1,10 +1,10 @@
 // socketcan_bus.cpp — see socketcan_bus.hpp.
 #include "hal/socketcan/socketcan_bus.hpp"
 
+#include <array>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
-#include <vector>
 
 #include <linux/can.h>
 #include <linux/can/error.h>
@@ -28,6 +28,27 @@ std::uint64_t clock_us(clockid_t clock) {
     clock_gettime(clock, &now);
     return static_cast<std::uint64_t>(now.tv_sec) * 1000000U +
            static_cast<std::uint64_t>(now.tv_nsec) / 1000U;
+}
+
+/// CLOCK_REALTIME and CLOCK_MONOTONIC at (nearly) one instant: the realtime reading between two
+/// monotonic ones, moved to the second; of up to 3 tries the tightest (a thread preempted
+/// between the readings would otherwise shift the offset by the preemption).
+void read_clocks(std::uint64_t& realtime_us, std::uint64_t& monotonic_us) {
+    std::uint64_t best_width = ~std::uint64_t{0};
+    for (int attempt = 0; attempt < 3; ++attempt) {  // bound: 3
+        const std::uint64_t before = clock_us(CLOCK_MONOTONIC);
+        const std::uint64_t realtime = clock_us(CLOCK_REALTIME);
+        const std::uint64_t after = clock_us(CLOCK_MONOTONIC);
+        const std::uint64_t width = after - before;
+        if (width < best_width) {
+            best_width = width;
+            realtime_us = realtime + width / 2U;
+            monotonic_us = after;
+        }
+        if (width <= 20U) {
+            break;
+        }
+    }
 }
 
 /// Waits until the socket is ready for `events` or `timeout_us` passes.
@@ -58,6 +79,29 @@ can_frame to_kernel(const CanFrame& frame) {
     kernel.len = frame.length;
     std::memcpy(kernel.data, frame.data.data(), frame.length);
     return kernel;
+}
+
+/// The kernel's form of a filter: the id format and "no remote frame" are part of the match.
+can_filter to_kernel_filter(const CanIdFilter& filter) {
+    const canid_t width = filter.extended ? CAN_EFF_MASK : CAN_SFF_MASK;
+    return can_filter{(filter.id & width) | (filter.extended ? CAN_EFF_FLAG : 0U),
+                      (filter.mask & width) | CAN_EFF_FLAG | CAN_RTR_FLAG};
+}
+
+/// Sets CAN_RAW_FILTER; no filter = the kernel's default, one filter that passes every frame.
+bool set_kernel_filters(int socket, std::span<const CanIdFilter> filters) {
+    std::array<can_filter, kCanMaxReceiveFilters> kernel{};
+    std::size_t count = 0;
+    for (const CanIdFilter& filter : filters) {  // bound: kCanMaxReceiveFilters (checked)
+        kernel[count] = to_kernel_filter(filter);
+        ++count;
+    }
+    if (count == 0U) {
+        kernel[0] = can_filter{0U, 0U};
+        count = 1;
+    }
+    return setsockopt(socket, SOL_CAN_RAW, CAN_RAW_FILTER, kernel.data(),
+                      static_cast<socklen_t>(count * sizeof(can_filter))) == 0;
 }
 
 CanFrame from_kernel(const can_frame& kernel) {
@@ -91,6 +135,7 @@ void SocketCanBus::close() {
 bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
     close();
     counters_ = {};
+    receive_clock_ = RealtimeToMonotonic{};
     const std::string where = "CAN interface '" + config.interface + "'";
     if (config.interface.empty() || config.interface.size() >= IFNAMSIZ) {
         error = where + ": the name must have 1 to " + std::to_string(IFNAMSIZ - 1) + " characters";
@@ -111,14 +156,20 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
         close();
         return false;
     }
-    std::vector<can_filter> filters;
-    for (const std::uint32_t id : config.receive_ids) {
-        filters.push_back(
-            can_filter{id & CAN_SFF_MASK, CAN_SFF_MASK | CAN_EFF_FLAG | CAN_RTR_FLAG});
+    if (config.receive_ids.size() > kCanMaxReceiveFilters) {
+        error =
+            where + ": at most " + std::to_string(kCanMaxReceiveFilters) + " receive identifiers";
+        close();
+        return false;
     }
-    if (!config.receive_ids.empty() &&
-        setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FILTER, filters.data(),
-                   static_cast<socklen_t>(filters.size() * sizeof(can_filter))) != 0) {
+    std::array<CanIdFilter, kCanMaxReceiveFilters> filters{};
+    std::size_t count = 0;
+    for (const std::uint32_t id : config.receive_ids) {  // bound: kCanMaxReceiveFilters
+        filters[count] = CanIdFilter{id & CAN_SFF_MASK, kCanStandardIdMask, false};
+        ++count;
+    }
+    if (count > 0U &&
+        !set_kernel_filters(fd, std::span<const CanIdFilter>{filters.data(), count})) {
         error = where + ": " + system_reason("setsockopt(CAN_RAW_FILTER)");
         close();
         return false;
@@ -149,6 +200,17 @@ bool SocketCanBus::open(const SocketCanConfig& config, std::string& error) {
         return false;
     }
     return true;
+}
+
+CanStatus SocketCanBus::set_receive_filter(std::span<const CanIdFilter> filters) {
+    if (filters.size() > kCanMaxReceiveFilters) {
+        return CanStatus::invalid;
+    }
+    if (socket_ < 0 || !set_kernel_filters(socket_, filters)) {
+        ++counters_.backend_errors;
+        return CanStatus::failed;
+    }
+    return CanStatus::ok;
 }
 
 CanStatus SocketCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {
@@ -198,8 +260,9 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
         message.msg_controllen = sizeof(control);
         const ssize_t length = ::recvmsg(socket_, &message, 0);
         if (length == static_cast<ssize_t>(sizeof(kernel))) {
-            const std::uint64_t realtime_now = clock_us(CLOCK_REALTIME);
-            const std::uint64_t monotonic_now = clock_us(CLOCK_MONOTONIC);
+            std::uint64_t realtime_now = 0;
+            std::uint64_t monotonic_now = 0;
+            read_clocks(realtime_now, monotonic_now);
             std::uint64_t stamp_realtime = realtime_now;
             for (cmsghdr* c = CMSG_FIRSTHDR(&message); c != nullptr; c = CMSG_NXTHDR(&message, c)) {
                 if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMP) {
@@ -213,10 +276,8 @@ CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeou
                     counters_.dropped = dropped;  // the kernel's running total for this socket
                 }
             }
-            const std::uint64_t age_us =
-                realtime_now > stamp_realtime ? realtime_now - stamp_realtime : 0U;
             received.frame = from_kernel(kernel);
-            received.timestamp_us = monotonic_now > age_us ? monotonic_now - age_us : 0U;
+            received.timestamp_us = receive_clock_.map(stamp_realtime, realtime_now, monotonic_now);
             count_received_frame(counters_, received.frame);
             return CanStatus::ok;
         }

@@ -1,12 +1,16 @@
 // socketcan_bus.hpp — hal::CanBus on a Linux CAN interface (SocketCAN, CAN_RAW).
 //
-//   * receive filters: only the identifiers the box listens to (standard ids) reach the socket;
-//     the kernel drops the rest before they cost anything;
+//   * receive filters: only the identifiers the box listens to reach the socket (CAN_RAW_FILTER,
+//     set at open() from SocketCanConfig::receive_ids or later by set_receive_filter(), which
+//     the executive calls at init with its drivers' identifiers); the kernel drops the rest
+//     before they reach the socket's buffer, so a flood of foreign frames costs the box nothing;
+//     remote frames never pass, error frames always do;
 //   * error frames: all error classes are subscribed (CAN_RAW_ERR_FILTER = CAN_ERR_MASK) and
 //     delivered as CanFrame::error frames;
 //   * timestamps: the kernel's receive timestamp (SO_TIMESTAMP, CLOCK_REALTIME) converted to
 //     CLOCK_MONOTONIC, the clock the executive runs on, by the offset between the two clocks
-//     read at receive time (µs accuracy; immune to wall-clock steps between frames);
+//     read at receive time (µs accuracy), robust to a wall-clock step while frames wait in the
+//     socket (realtime_to_monotonic.hpp): the executive judges a sample's freshness by its age;
 //   * drops: SO_RXQ_OVFL — the kernel's count of frames dropped because the socket's receive
 //     buffer was full — is CanCounters::dropped;
 //   * send: non-blocking write; with a timeout, waits for room (POLLOUT) and tries once more.
@@ -21,6 +25,7 @@
 #include <string>
 
 #include "hal/can_bus.hpp"
+#include "hal/socketcan/realtime_to_monotonic.hpp"
 
 namespace scopekin::hal {
 
@@ -48,10 +53,14 @@ public:
     CanStatus send(const CanFrame& frame, std::uint32_t timeout_us) override;
     CanStatus receive(ReceivedCanFrame& received, std::uint32_t timeout_us) override;
     [[nodiscard]] CanCounters counters() const override { return counters_; }
+    /// CAN_RAW_FILTER with one kernel filter per CanIdFilter (an empty span: every frame).
+    /// failed (counted in backend_errors) if the socket is not open or the kernel refuses.
+    CanStatus set_receive_filter(std::span<const CanIdFilter> filters) override;
 
 private:
     int socket_{-1};
     CanCounters counters_{};
+    RealtimeToMonotonic receive_clock_{};
 };
 
 }  // namespace scopekin::hal

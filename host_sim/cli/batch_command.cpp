@@ -162,9 +162,10 @@ int run_batch(const BatchOptions& options) {
 
     try {
         const fs::path dir(options.out);
-        prepare_directory(dir, {});
         char name[64];
         std::snprintf(name, sizeof name, "summary_shard_%zu_of_%zu.csv", shard, shards);
+        prepare_directory(dir,
+                          {name});  // the old shard summary goes first; the new is renamed last
         PartFile summary(dir / name, dir / (std::string(name) + ".incomplete"));
         summary.stream() << kSummaryHeader << "\n";
         std::printf("shard %zu/%zu: %zu of the manifest's %zu entries\n", shard, shards,
@@ -290,13 +291,14 @@ int run_merge(const MergeOptions& options) {
             }
         }
     }
-    std::ofstream out(options.out);
-    out << kSummaryHeader << "\n";
-    for (const auto& [entry, line] : rows)
-        out << line << "\n";
-    out.close();
-    if (!out) {
-        std::cerr << "scopekin batch-merge: cannot write " << options.out << "\n";
+    try {
+        PartFile merged{fs::path(options.out)};
+        merged.stream() << kSummaryHeader << "\n";
+        for (const auto& [entry, line] : rows)
+            merged.stream() << line << "\n";
+        merged.finish(true);
+    } catch (const OutputError& e) {
+        std::cerr << "scopekin batch-merge: " << e.what() << "\n";
         return 3;
     }
     std::vector<std::size_t> missing;
@@ -339,8 +341,10 @@ void add_batch_commands(CLI::App& app) {
     cmd->add_option("--shard", options->shard, "I/N: this job's shard (0-based) of N")
         ->default_val("0/1");
     cmd->add_option("--out", options->out, "Output directory")->required();
-    cmd->add_option("--seed", options->seed, "Seed of the sensor models for the scenarios")
-        ->default_val(1);
+    cmd->add_option("--seed", options->seed,
+                    "Seed of the sensor models for the scenarios (0 .. 2^64-1)")
+        ->default_val(1)
+        ->check(whole_number());
     cmd->add_flag("--quiet", options->quiet, "No progress bars");
     cmd->callback([options]() { throw CLI::RuntimeError(run_batch(*options)); });
 

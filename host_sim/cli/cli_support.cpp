@@ -1,34 +1,61 @@
 #include "host_sim/cli/cli_support.hpp"
 
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <system_error>
+
+#include "model/io/strict_json.hpp"
+
+extern char** environ;
 
 namespace scopekin::cli {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+fs::path part_of(const fs::path& path) {
+    return path.string() + ".part";
+}
+
+void rename_part(const fs::path& part, const fs::path& target) {
+    std::error_code ec;
+    fs::rename(part, target, ec);
+    if (ec)
+        throw OutputError("cannot rename " + part.string() + " to " + target.string() + ": " +
+                          ec.message());
+}
+
+}  // namespace
+
 PartFile::PartFile(fs::path final_path, fs::path incomplete_path)
     : final_(std::move(final_path)),
       incomplete_(std::move(incomplete_path)),
-      part_(final_.string() + ".part") {
-    out_.open(part_);
+      part_(part_of(final_)) {
+    out_.open(part_, std::ios::binary);
     if (!out_) throw OutputError("cannot write " + part_.string());
 }
+
+PartFile::PartFile(fs::path final_path) : PartFile(final_path, final_path) {}
 
 fs::path PartFile::finish(bool complete) {
     out_.close();
     if (out_.fail()) throw OutputError("error while writing " + part_.string());
     const fs::path& target = complete ? final_ : incomplete_;
-    std::error_code ec;
-    fs::rename(part_, target, ec);
-    if (ec)
-        throw OutputError("cannot rename " + part_.string() + " to " + target.string() + ": " +
-                          ec.message());
+    rename_part(part_, target);
     return target;
 }
 
@@ -88,18 +115,98 @@ void prepare_directory(const fs::path& dir, std::initializer_list<const char*> o
         throw OutputError("cannot create the output directory " + dir.string() +
                           (ec ? ": " + ec.message() : ""));
     for (const char* name : old_outputs) {
-        fs::remove(dir / name, ec);
-        if (ec)
-            throw OutputError("cannot remove the old " + (dir / name).string() + ": " +
-                              ec.message());
+        for (const fs::path& old : {dir / name, part_of(dir / name)}) {
+            fs::remove(old, ec);
+            if (ec)
+                throw OutputError("cannot remove the old " + old.string() + ": " + ec.message());
+        }
     }
 }
 
-void write_json(const fs::path& path, const nlohmann::ordered_json& json) {
-    std::ofstream out(path);
+fs::path write_json_part(const fs::path& path, const nlohmann::ordered_json& json) {
+    const fs::path part = part_of(path);
+    std::ofstream out(part, std::ios::binary);
     out << json.dump(2) << "\n";
     out.close();
-    if (!out) throw OutputError("cannot write " + path.string());
+    if (!out) throw OutputError("cannot write " + part.string());
+    return part;
+}
+
+void commit_part(const fs::path& path) {
+    rename_part(part_of(path), path);
+}
+
+void write_json(const fs::path& path, const nlohmann::ordered_json& json) {
+    write_json_part(path, json);
+    commit_part(path);
+}
+
+CLI::Validator positive_seconds() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            double value = 0;
+            const char* end = text.data() + text.size();
+            const auto r = std::from_chars(text.data(), end, value);
+            if (text.empty() || r.ec != std::errc() || r.ptr != end || !std::isfinite(value) ||
+                !(value > 0))
+                return model::io::quote_text(text) + " is not a positive, finite number of seconds";
+            return {};
+        },
+        "SECONDS");
+}
+
+CLI::Validator whole_number() {
+    return CLI::Validator(
+        [](std::string& text) -> std::string {
+            std::uint64_t value = 0;
+            const char* end = text.data() + text.size();
+            const auto r = std::from_chars(text.data(), end, value);
+            if (text.empty() || r.ec != std::errc() || r.ptr != end)
+                return model::io::quote_text(text) + " is not a whole number from 0 to " +
+                       std::to_string(std::numeric_limits<std::uint64_t>::max());
+            return {};
+        },
+        "UINT");
+}
+
+std::string ProgramResult::describe() const {
+    if (!started) return "could not be started: " + error;
+    if (signal != 0)
+        return "was ended by signal " + std::to_string(signal) + " (" + strsignal(signal) + ")";
+    return "exited " + std::to_string(exit_status);
+}
+
+ProgramResult run_program(const std::vector<std::string>& argv) {
+    ProgramResult result;
+    if (argv.empty()) {
+        result.error = "no program";
+        return result;
+    }
+    std::vector<char*> args;
+    args.reserve(argv.size() + 1);
+    for (const std::string& a : argv)
+        args.push_back(const_cast<char*>(a.c_str()));  // posix_spawn's signature; not written
+    args.push_back(nullptr);
+    std::fflush(stdout);  // the child's output comes after ours
+    std::fflush(stderr);
+    pid_t pid = 0;
+    const int spawned = posix_spawn(&pid, args[0], nullptr, nullptr, args.data(), environ);
+    if (spawned != 0) {
+        result.error = argv[0] + ": " + std::strerror(spawned);
+        return result;
+    }
+    result.started = true;
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0) {
+        if (errno != EINTR) {
+            result.started = false;
+            result.error = std::string("waiting for ") + argv[0] + ": " + std::strerror(errno);
+            return result;
+        }
+    }
+    if (WIFEXITED(status)) result.exit_status = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
+    return result;
 }
 
 }  // namespace scopekin::cli

@@ -1,15 +1,14 @@
 #include "host_sim/cli/demo_command.hpp"
 
-#include <sys/wait.h>
-
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
@@ -34,13 +33,15 @@ std::string default_folder() {
     return name;
 }
 
-/// Draws the plots with the bundled script (python3-matplotlib). Returns the script's status.
-int draw_plots(const fs::path& dir, bool quiet) {
-    const std::string command = std::string(SCOPEKIN_PYTHON) + " '" + SCOPEKIN_PLOT_SCRIPT + "' '" +
-                                dir.string() + "'" + (quiet ? " --quiet" : "");
-    const int status = std::system(command.c_str());
-    if (status == -1 || !WIFEXITED(status)) return 3;
-    return WEXITSTATUS(status);
+/// Draws the plots with the bundled script (python3-matplotlib), run with an argument vector
+/// (no shell: the folder's name reaches it as it is). The summary is still summary.json.part.
+ProgramResult draw_plots(const fs::path& dir, const fs::path& summary_part, bool quiet) {
+    std::vector<std::string> argv{SCOPEKIN_PYTHON, SCOPEKIN_PLOT_SCRIPT};
+    if (quiet) argv.emplace_back("--quiet");
+    argv.emplace_back("--summary");
+    argv.push_back(fs::absolute(summary_part).string());
+    argv.push_back(fs::absolute(dir).string());  // absolute: a name starting with '-' is no option
+    return run_program(argv);
 }
 
 int run_demo(const DemoOptions& options) {
@@ -61,6 +62,13 @@ int run_demo(const DemoOptions& options) {
         live.seed = options.seed;
         live.quiet = options.quiet;
         live.command = "demo";
+        // The plots are drawn before summary.json is renamed (it is renamed last of all).
+        std::optional<ProgramResult> plots;
+        live.before_summary = [&](const fs::path& summary_part, bool complete) {
+            if (!complete) return;  // the run failed: exit status 1, no plots
+            if (!options.quiet) std::cerr << "drawing the plots ..." << std::endl;
+            plots = draw_plots(dir, summary_part, options.quiet);
+        };
         const LiveRunReport report = run_live_to_folder(sc, live);
         print_run_tables(report);
         if (!report.complete) {
@@ -68,11 +76,9 @@ int run_demo(const DemoOptions& options) {
                       << report.summary["message"].get<std::string>() << "\n";
             return 1;
         }
-        if (!options.quiet) std::cerr << "drawing the plots ..." << std::endl;
-        const int plots = draw_plots(dir, options.quiet);
-        if (plots != 0) {
+        if (!plots || !plots->ok()) {
             std::cerr << "scopekin demo: the plots could not be drawn (" << SCOPEKIN_PLOT_SCRIPT
-                      << " exited " << plots
+                      << " " << (plots ? plots->describe() : "did not run")
                       << "; is python3-matplotlib installed? ./scopekin.sh installs it)\n";
             return 3;
         }
@@ -116,8 +122,10 @@ void add_demo_command(CLI::App& app) {
     cmd->add_option("--scenario", options->scenario,
                     "Another world scenario to run instead of the bundled one")
         ->check(CLI::ExistingFile);
-    cmd->add_option("--seed", options->seed, "Seed of the sensor models' noise and dropouts")
-        ->default_val(1);
+    cmd->add_option("--seed", options->seed,
+                    "Seed of the sensor models' noise and dropouts (0 .. 2^64-1)")
+        ->default_val(1)
+        ->check(whole_number());
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_demo(*options)); });
 }

@@ -4,7 +4,9 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/discrepancy/static_cantilever.hpp"
@@ -24,6 +26,7 @@ struct DiscrepancyOptions {
     std::string model;
     std::string out;
     unsigned threads = 2;
+    double max_gap_s = recording::kDefaultMaxGap_s;
     double fit_budget_s = discrepancy::kDefaultFitBudget_s;
     bool quiet = false;
     bool plots = true;
@@ -40,10 +43,10 @@ int run_thesis_cantilever_case(const DiscrepancyOptions& o) {
                 stderr,
                 "fitting the four candidates, each also nine times with one point left out ...\n");
         const discrepancy::CantileverReport r = discrepancy::run_thesis_cantilever();
-        write_json(dir / "report.json", r.json);
-        std::ofstream md(dir / "report.md");
-        md << r.markdown;
-        if (!md) throw OutputError("cannot write " + (dir / "report.md").string());
+        PartFile md(dir / "report.md");
+        md.stream() << r.markdown;
+        md.finish(true);
+        write_json(dir / "report.json", r.json);  // last of all
         std::printf("%s", r.markdown.c_str());
         std::printf("wrote report.json, report.md into %s\n", dir.string().c_str());
         return 0;
@@ -134,7 +137,9 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
     if (o.thesis_cantilever) return run_thesis_cantilever_case(o);
     recording::Recording rec;
     try {
-        rec = recording::RecordingReader().read_file(o.recording);
+        recording::RecordingReaderOptions reader_options;
+        reader_options.max_gap_s = o.max_gap_s;
+        rec = recording::RecordingReader(reader_options).read_file(o.recording);
     } catch (const recording::RecordingError& e) {
         std::cerr << "scopekin discrepancy: invalid recording: " << e.what() << "\n";
         return 2;
@@ -153,23 +158,23 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
             discrepancy::extract_measured_recording(rec, o.recording);
         const fs::path dir(o.out);
         prepare_directory(dir, {"report.json", "report.md", "model.json", "series.csv",
-                                "outputs.png", "residuals.png", "candidates.png"});
+                                "outputs.png", "residuals.png", "candidates.png"});  // report first
         ProgressBar bar(o.quiet);
         options.progress = [&](const std::string& stage, double fraction) {
             bar.update(fraction, stage);
         };
         const discrepancy::WorkflowResult result = discrepancy::run_discrepancy(data, options);
         bar.done();
-        write_json(dir / "report.json", result.report);
         write_json(dir / "model.json", Json::parse(result.model.dump()));
         {
-            std::ofstream md(dir / "report.md");
-            md << report_markdown(result.report);
-            if (!md) throw OutputError("cannot write " + (dir / "report.md").string());
+            PartFile md(dir / "report.md");
+            md.stream() << report_markdown(result.report);
+            md.finish(true);
         }
         {
             // The series behind the plots: every measured sample with the model before and after.
-            std::ofstream csv(dir / "series.csv");
+            PartFile series(dir / "series.csv");
+            std::ostream& csv = series.stream();
             csv << "output,component,time_s,held_out,measured,before,after\n";
             for (std::size_t k = 0; k < data.outputs.size(); ++k) {
                 const discrepancy::MeasuredSeries& m = data.outputs[k];
@@ -184,8 +189,21 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
                             << ',' << m.value[i][c] << ',' << result.before.outputs[k][i][c] << ','
                             << result.after.outputs[k][i][c] << '\n';
             }
-            if (!csv) throw OutputError("cannot write " + (dir / "series.csv").string());
+            series.finish(true);
         }
+        // report.json is renamed last of all, after the plots (drawn from report.json.part).
+        const fs::path report_part = write_json_part(dir / "report.json", result.report);
+        std::optional<ProgramResult> plots;
+        if (o.plots) {
+            // An argument vector, no shell: the folder's name reaches the script as it is.
+            std::vector<std::string> argv{SCOPEKIN_PYTHON, SCOPEKIN_DISCREPANCY_PLOT_SCRIPT};
+            if (o.quiet) argv.emplace_back("--quiet");
+            argv.emplace_back("--report");
+            argv.push_back(fs::absolute(report_part).string());
+            argv.push_back(fs::absolute(dir).string());  // absolute: never taken for an option
+            plots = run_program(argv);
+        }
+        commit_part(dir / "report.json");
         const Json& r = result.report;
         std::printf("verdict: %s\n", r["verdict"].get<std::string>().c_str());
         for (const Json& e : r["effects"]) {
@@ -214,13 +232,10 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
                             ? ("noise " + std::to_string(noise.get<double>()).substr(0, 6)).c_str()
                             : "noise unknown: not assessed");
         }
-        if (o.plots) {
-            const std::string command = std::string(SCOPEKIN_PYTHON) + " " +
-                                        SCOPEKIN_DISCREPANCY_PLOT_SCRIPT + " " +
-                                        (o.quiet ? "--quiet " : "") + "'" + dir.string() + "'";
-            if (std::system(command.c_str()) != 0)
-                throw OutputError("the plots could not be drawn (" + command + ")");
-        }
+        if (plots && !plots->ok())
+            throw OutputError(std::string("the plots could not be drawn (") +
+                              SCOPEKIN_DISCREPANCY_PLOT_SCRIPT + " " + plots->describe() +
+                              "); the report is complete without them");
         std::printf(
             "%zu model runs, %.1f s; wrote report.json, report.md, model.json, series.csv%s into "
             "%s\n",
@@ -280,9 +295,15 @@ void add_discrepancy_command(CLI::App& app) {
     cmd->add_option("--out", options->out,
                     "Output directory (created if missing; old outputs in it are replaced)")
         ->required();
-    cmd->add_option("--threads", options->threads, "Model runs in parallel")
+    cmd->add_option("--threads", options->threads, "Model runs in parallel (1 .. 64)")
         ->default_val(2)
+        ->check(whole_number())
         ->check(CLI::Range(1, 64));
+    cmd->add_option("--max-gap-s", options->max_gap_s,
+                    "Refuse a recording with two rows further apart than this [s] (the line is "
+                    "named): the model would be run across the gap")
+        ->default_val(recording::kDefaultMaxGap_s)
+        ->check(positive_seconds());
     cmd->add_option("--fit-budget-s", options->fit_budget_s,
                     "Recording seconds one fit run simulates at most (at least 80: ten windows of "
                     "3 s spin-up and 5 s "
@@ -292,6 +313,7 @@ void add_discrepancy_command(CLI::App& app) {
                     "finally named are "
                     "checked over the whole recording")
         ->default_val(discrepancy::kDefaultFitBudget_s)
+        ->check(positive_seconds())
         ->check(CLI::Range(discrepancy::kMinFitBudget_s, 100000.0));
     cmd->add_flag(
         "--no-plots", [options](std::int64_t) { options->plots = false; },

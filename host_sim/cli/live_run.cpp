@@ -23,11 +23,10 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     const sensors::SensorSuiteConfig sensor_config =
         sensors::read_sensor_config(sc.sensors, sc.sensors_path);
     const fs::path dir = options.out;
-    prepare_directory(
-        dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "world.csv",
-              "world.incomplete.csv", "world.csv.part", "firmware.csv", "firmware.incomplete.csv",
-              "firmware.csv.part", "contacts.csv", "contacts.incomplete.csv", "contacts.csv.part",
-              "snapshots.json", "summary.json", "forces.png", "advance.png", "snapshots.png"});
+    prepare_directory(dir, {"summary.json", "recording.csv", "recording.incomplete.csv",
+                            "world.csv", "world.incomplete.csv", "firmware.csv",
+                            "firmware.incomplete.csv", "contacts.csv", "contacts.incomplete.csv",
+                            "snapshots.json", "forces.png", "advance.png", "snapshots.png"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     PartFile world(dir / "world.csv", dir / "world.incomplete.csv");
     PartFile firmware(dir / "firmware.csv", dir / "firmware.incomplete.csv");
@@ -120,8 +119,10 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     s["truth_effects"] = effects;
     s["warnings"] = sum.warnings;
     s["files"] = files;
-    write_json(dir / "summary.json", s);
     report.summary = s;
+    const fs::path summary_part = write_json_part(dir / "summary.json", s);
+    if (options.before_summary) options.before_summary(summary_part, report.complete);
+    commit_part(dir / "summary.json");
     return report;
 }
 

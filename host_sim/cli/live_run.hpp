@@ -2,9 +2,11 @@
 // A live simulation written to a run folder (host_sim/README.md, "Commands"): recording.csv,
 // world.csv, firmware.csv, snapshots.json and summary.json. Used by `simulate` (world
 // scenarios) and `demo`. Files are written as NAME.part; a run that fails leaves
-// NAME.incomplete.csv and a summary with status "failed".
+// NAME.incomplete.csv and a summary with status "failed". summary.json is renamed last of all,
+// after `before_summary` (the demo's plots) has run.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -19,6 +21,9 @@ struct LiveRunOptions {
     std::uint64_t seed = 1;
     bool quiet = false;
     std::string command = "simulate";  ///< for messages
+    /// Runs with every other file finished (complete: the run completed) and summary.json still
+    /// summary.json.part (its path is given); summary.json is renamed after it returns.
+    std::function<void(const std::filesystem::path& summary_part, bool complete)> before_summary;
 };
 
 struct LiveRunReport {

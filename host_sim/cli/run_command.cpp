@@ -24,6 +24,7 @@ int run_recording(const RunOptions& options) {
     const auto start = std::chrono::steady_clock::now();
     recording::RecordingReaderOptions reader_options;
     reader_options.gap_threshold_s = options.gap_threshold_s;
+    reader_options.max_gap_s = options.max_gap_s;
     recording::Recording rec;
     try {
         rec = recording::RecordingReader(reader_options).read_file(options.recording);
@@ -38,7 +39,7 @@ int run_recording(const RunOptions& options) {
     }
     try {
         const fs::path dir(options.out);
-        prepare_directory(dir, {"firmware.csv", "firmware.csv.part", "summary.json"});
+        prepare_directory(dir, {"summary.json", "firmware.csv", "firmware.incomplete.csv"});
         PartFile firmware_csv(dir / "firmware.csv", dir / "firmware.incomplete.csv");
         host_sim::BoxObserver observer(&firmware_csv.stream());
         host_sim::FirmwareLoop loop([&](const host_sim::BoxPeriod& p) { observer.observe(p); });
@@ -118,9 +119,14 @@ void add_run_command(CLI::App& app) {
                     "Output directory (created if missing; old outputs in it are replaced)")
         ->required();
     cmd->add_option("--gap-s", options->gap_threshold_s,
-                    "A handle signal silent longer than this [s] is a gap")
+                    "A handle signal silent longer than this [s] is a gap: flagged, not refused")
         ->default_val(0.05)
-        ->check(CLI::PositiveNumber);
+        ->check(positive_seconds());
+    cmd->add_option("--max-gap-s", options->max_gap_s,
+                    "Refuse a recording with two rows further apart than this [s] (the line is "
+                    "named): the box would step a period every 5 ms across the gap")
+        ->default_val(recording::kDefaultMaxGap_s)
+        ->check(positive_seconds());
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_recording(*options)); });
 }

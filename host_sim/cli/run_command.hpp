@@ -3,12 +3,15 @@
 
 #include <string>
 
+#include "host_sim/recording/recording_reader.hpp"
+
 namespace scopekin::cli {
 
 struct RunOptions {
     std::string recording;
     std::string out;
     double gap_threshold_s = 0.05;
+    double max_gap_s = recording::kDefaultMaxGap_s;
     bool quiet = false;
 };
 

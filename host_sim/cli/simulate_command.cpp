@@ -74,8 +74,7 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
 int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
     model::io::BeamProblem& p = *sc.beam_problem;
     const fs::path dir(options.out);
-    prepare_directory(
-        dir, {"recording.csv", "recording.incomplete.csv", "recording.csv.part", "summary.json"});
+    prepare_directory(dir, {"summary.json", "recording.csv", "recording.incomplete.csv"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     if (!options.quiet)
         std::cerr << "solving the free beam " << sc.source
@@ -156,8 +155,10 @@ void add_simulate_command(CLI::App& app) {
                     "Output directory (created if missing; old outputs in it are replaced)")
         ->required();
     cmd->add_option("--seed", options->seed,
-                    "Seed of the sensor models' noise and dropouts (same seed, same run)")
-        ->default_val(1);
+                    "Seed of the sensor models' noise and dropouts (same seed, same run; 0 .. "
+                    "2^64-1)")
+        ->default_val(1)
+        ->check(whole_number());
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
 }

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "host_sim/cli/cli_support.hpp"
 #include "model/beam/rotation.hpp"
 #include "model/io/beam_problem.hpp"
 
@@ -52,12 +53,15 @@ int run_static(const StaticOptions& options) {
             {"problem", options.problem}, {"converged", report.converged},
             {"message", report.message},  {"newton_iterations", report.total_iterations},
             {"load_steps", steps},        {"nodes", nodes}};
-        std::ofstream out(options.out);
-        if (!out) {
-            std::cerr << "scopekin static: cannot write " << options.out << "\n";
+        try {
+            cli::PartFile out{
+                std::filesystem::path(options.out)};  // OUT.part, renamed when written
+            out.stream() << result.dump(2) << "\n";
+            out.finish(true);
+        } catch (const OutputError& e) {
+            std::cerr << "scopekin static: " << e.what() << "\n";
             return 3;
         }
-        out << result.dump(2) << "\n";
         std::cerr << "wrote " << options.out << "\n";
     }
     return report.converged ? 0 : 1;

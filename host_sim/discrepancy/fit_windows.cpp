@@ -32,11 +32,16 @@ std::vector<RunWindow> choose_fit_windows(const MeasuredRecording& data, double 
     for (int b = 0; b < kBlocks; ++b) {
         const double first = data.start_s + block * b;
         const double last = first + block - length;
-        // Candidate starts every 0.25 s; the most motion wins (the earliest of equals).
+        // Candidate starts every 0.25 s; the most motion wins (the earliest of equals). At most
+        // kMaxWindowStarts of them: a longer block spreads them evenly (the work stays bounded
+        // whatever the recording's length).
         double best_start = first, best_motion = -1.0;
-        const int positions = static_cast<int>(std::floor((last - first) / 0.25)) + 1;
+        const double span = last - first;
+        const double step =
+            span / 0.25 < kMaxWindowStarts - 1 ? 0.25 : span / (kMaxWindowStarts - 1);
+        const int positions = static_cast<int>(std::floor(span / step)) + 1;
         for (int k = 0; k < positions; ++k) {
-            const double start = first + 0.25 * k;
+            const double start = first + step * k;
             const double motion = hand_motion_mm(data, start, start + length);
             if (motion > best_motion + 1e-9) {
                 best_motion = motion;

@@ -33,6 +33,8 @@ inline constexpr double kDefaultFitBudget_s = 80.0;
 /// spin-up named ei_scale for a hidden ei_profile and missed a pair; 8 s windows named all seven
 /// cases right.
 inline constexpr double kMinFitBudget_s = 80.0;
+/// Candidate window starts per block at most (every 0.25 s up to a 1000 s block, then spread).
+inline constexpr double kMaxWindowStarts = 4001;
 /// Roll counts as this much insertion when windows are placed by hand motion [mm/rad].
 inline constexpr double kRollMotion_mm_per_rad = 20.0;
 

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Plot a discrepancy report: writes outputs.png (measured vs model before and after),
 residuals.png (residual before and after, held-out blocks shaded) and candidates.png (the
-candidates' held-out scores) into DIR, from DIR/series.csv and DIR/report.json."""
+candidates' held-out scores) into DIR, from DIR/series.csv and DIR/report.json (or --report FILE).
+Each PNG is written as NAME.part and renamed when complete."""
 import argparse
 import csv
 import json
@@ -15,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def load(directory):
+def load(directory, report_path=None):
     series = defaultdict(lambda: defaultdict(list))
     with open(os.path.join(directory, "series.csv"), newline="") as f:
         for row in csv.DictReader(f):
@@ -23,7 +24,7 @@ def load(directory):
             for key in ("time_s", "measured", "before", "after"):
                 s[key].append(float(row[key]))
             s["held_out"].append(row["held_out"] == "1")
-    with open(os.path.join(directory, "report.json")) as f:
+    with open(report_path or os.path.join(directory, "report.json")) as f:
         report = json.load(f)
     return series, report
 
@@ -43,8 +44,18 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("directory")
     parser.add_argument("--quiet", action="store_true")
+    parser.add_argument("--report", metavar="FILE",
+                        help="read the report from FILE instead of DIR/report.json (scopekin discrepancy draws the "
+                             "plots before it renames report.json.part, last of all)")
     args = parser.parse_args()
-    series, report = load(args.directory)
+    series, report = load(args.directory, args.report)
+
+    def save(fig, name):
+        """Writes NAME.part and renames it: a PNG under its name is always complete."""
+        path = os.path.join(args.directory, name)
+        fig.savefig(path + ".part", dpi=110, format="png")
+        os.replace(path + ".part", path)
+        plt.close(fig)
     keys = sorted(series.keys())
     verdict = report["verdict"]
     named = ", ".join(e["name"] for e in report["effects"]) or "none"
@@ -73,8 +84,7 @@ def main():
         axes[-1, 0].set_xlabel("time (s); grey: held-out blocks")
         fig.suptitle(f"{title}: verdict {verdict} ({named})")
         fig.tight_layout()
-        fig.savefig(os.path.join(args.directory, name), dpi=110)
-        plt.close(fig)
+        save(fig, name)
         if not args.quiet:
             print(f"plot_discrepancy: wrote {os.path.join(args.directory, name)}", file=sys.stderr)
 
@@ -92,8 +102,7 @@ def main():
     ax.legend(fontsize=8)
     ax.set_title(f"candidates: verdict {verdict} ({named})")
     fig.tight_layout()
-    fig.savefig(os.path.join(args.directory, "candidates.png"), dpi=110)
-    plt.close(fig)
+    save(fig, "candidates.png")
     if not args.quiet:
         print(f"plot_discrepancy: wrote {os.path.join(args.directory, 'candidates.png')}", file=sys.stderr)
 

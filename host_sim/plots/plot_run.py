@@ -311,10 +311,10 @@ FIRMWARE_NUMERIC = ["time_s", "tip_path_mm", "advance_efficiency", "self_lock_al
                     "station_0_normal_N", "station_0_tangential_N"]
 
 
-def read_run(run_dir):
+def read_run(run_dir, summary=None):
     if not os.path.isdir(run_dir):
         raise InputError(f"{run_dir}: not a directory")
-    p = lambda n: os.path.join(run_dir, n)  # noqa: E731
+    p = lambda n: summary if n == "summary.json" and summary else os.path.join(run_dir, n)  # noqa: E731
     # check all files exist first: one message naming every missing one
     names = ["recording.csv", "world.csv", "firmware.csv", "snapshots.json", "summary.json"]
     missing = [n for n in names if not os.path.isfile(p(n))]
@@ -439,8 +439,11 @@ def shade_alarms(ax, alarms, t_start, t_end, label_text=True):
 
 
 def save(fig, path):
+    """Writes PATH.part and renames it to PATH: a PNG under its name is always complete."""
+    part = path + ".part"
     try:
-        fig.savefig(path, dpi=DPI)
+        fig.savefig(part, dpi=DPI, format="png")
+        os.replace(part, path)
     except OSError as e:
         raise OutputError(f"{path}: cannot write: {e.strerror or e}")
     finally:
@@ -794,9 +797,12 @@ def main(argv=None):
                "input, 3 an output that cannot be written.")
     ap.add_argument("run_dir", metavar="RUN_DIR", help="directory of the run (inputs and outputs)")
     ap.add_argument("--quiet", action="store_true", help="print nothing on success")
+    ap.add_argument("--summary", metavar="FILE",
+                    help="read the summary from FILE instead of RUN_DIR/summary.json (scopekin demo draws the "
+                         "plots before it renames summary.json.part, last of all)")
     args = ap.parse_args(argv)
     try:
-        data = read_run(args.run_dir)
+        data = read_run(args.run_dir, args.summary)
         for name, fn in (("forces.png", plot_forces), ("advance.png", plot_advance), ("snapshots.png", plot_snapshots)):
             out = os.path.join(args.run_dir, name)
             t0 = time.monotonic()

@@ -7,6 +7,7 @@
 
 #include "host_sim/recording/wire_values.hpp"
 #include "model/colon/colon_region.hpp"
+#include "model/io/strict_json.hpp"
 
 namespace scopekin::recording {
 
@@ -158,8 +159,8 @@ std::optional<CellProblem> check_row_values(const RecordingRow& row) {
         std::string names;
         for (model::ColonRegion r : model::kColonRegionsInOrder)
             names += (names.empty() ? "" : ", ") + std::string(model::region_name(r));
-        return CellProblem{"region",
-                           "'" + row.region + "' is not a colon region (" + names + ", or empty)"};
+        return CellProblem{"region", model::io::quote_text(row.region) +
+                                         " is not a colon region (" + names + ", or empty)"};
     }
     return std::nullopt;
 }
@@ -216,12 +217,15 @@ RecordingWriter::RecordingWriter(std::ostream& out, std::vector<std::string> ext
     std::set<std::string> seen(recording_columns().begin(), recording_columns().end());
     for (const std::string& name : extra_columns_) {
         if (name.rfind("x_", 0) != 0 || name.size() < 3)
-            throw RecordingError("line 1: extra column '" + name + "' must start with 'x_'", 1);
-        if (name.find_first_of(",\"\r\n") != std::string::npos)
             throw RecordingError(
-                "line 1: extra column '" + name + "' contains a comma, quote or line break", 1);
+                "line 1: extra column " + model::io::quote_text(name) + " must start with 'x_'", 1);
+        if (name.find_first_of(",\"\r\n") != std::string::npos)
+            throw RecordingError("line 1: extra column " + model::io::quote_text(name) +
+                                     " contains a comma, quote or line break",
+                                 1);
         if (!seen.insert(name).second)
-            throw RecordingError("line 1: column '" + name + "' appears twice", 1);
+            throw RecordingError("line 1: column " + model::io::quote_text(name) + " appears twice",
+                                 1);
     }
     std::string header = recording_header();
     for (const std::string& name : extra_columns_)

@@ -7,10 +7,13 @@
 #include <optional>
 
 #include "host_sim/recording/recording_format.hpp"
+#include "model/io/strict_json.hpp"
 
 namespace scopekin::recording {
 
 namespace {
+
+using model::io::quote_text;
 
 constexpr std::size_t kTimeColumn = 0;
 constexpr std::size_t kForceColumn = 1;      // force, torque
@@ -59,10 +62,20 @@ public:
         const char* begin = text.data();
         const char* end = begin + text.size();
         const auto result = std::from_chars(begin, end, value);
+        if (!text.empty() && result.ec == std::errc::result_out_of_range && result.ptr == end) {
+            // Beyond double: 1e309 is out of range; 1e-400 is 0, as the JSON readers take it.
+            value = std::strtod(text.c_str(), nullptr);
+            if (std::isinf(value))
+                fail(recording_columns()[column],
+                     quote_text(text) +
+                         " is out of range (a number's magnitude must be below "
+                         "1.8e308)");
+            return value;
+        }
         if (text.empty() || result.ec != std::errc() || result.ptr != end)
-            fail(recording_columns()[column], "'" + text + "' is not a number");
+            fail(recording_columns()[column], quote_text(text) + " is not a number");
         if (!std::isfinite(value))
-            fail(recording_columns()[column], "'" + text + "' is not a finite number");
+            fail(recording_columns()[column], quote_text(text) + " is not a finite number");
         return value;
     }
 
@@ -74,7 +87,7 @@ public:
         std::int64_t seconds = 0;
         std::size_t int_digits = 0;
         while (i < text.size() && text[i] >= '0' && text[i] <= '9') {
-            if (++int_digits > 10) fail(name, "'" + text + "' is too large (at most 10^9 s)");
+            if (++int_digits > 10) fail(name, quote_text(text) + " is too large (at most 10^9 s)");
             seconds = seconds * 10 + (text[i] - '0');
             ++i;
         }
@@ -84,7 +97,8 @@ public:
             ++i;
             while (i < text.size() && text[i] >= '0' && text[i] <= '9') {
                 if (++decimals > 6)
-                    fail(name, "'" + text + "' has more than 6 decimals (time_s is in whole µs)");
+                    fail(name,
+                         quote_text(text) + " has more than 6 decimals (time_s is in whole µs)");
                 micro = micro * 10 + (text[i] - '0');
                 ++i;
             }
@@ -94,17 +108,17 @@ public:
             double value = 0;
             const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
             if (text.empty() || result.ec != std::errc() || result.ptr != text.data() + text.size())
-                fail(name, "'" + text + "' is not a number");
-            if (value < 0) fail(name, "'" + text + "' is negative");
-            fail(name,
-                 "'" + text +
-                     "' is not written as plain seconds with at most 6 decimals (e.g. 12.000250)");
+                fail(name, quote_text(text) + " is not a number");
+            if (value < 0) fail(name, quote_text(text) + " is negative");
+            fail(name, quote_text(text) +
+                           " is not written as plain seconds with at most 6 decimals (e.g. "
+                           "12.000250)");
         }
         for (std::size_t d = decimals; d < 6; ++d)
             micro *= 10;
         const std::int64_t total = seconds * 1'000'000 + micro;
         if (total > RecordingLimits::time_max_us)
-            fail(name, "'" + text + "' is too large (at most 10^9 s)");
+            fail(name, quote_text(text) + " is too large (at most 10^9 s)");
         return total;
     }
 
@@ -165,6 +179,10 @@ RecordingReader::RecordingReader(RecordingReaderOptions options) : options_(opti
     if (!(options_.gap_threshold_s > 0) || !std::isfinite(options_.gap_threshold_s))
         throw RecordingError(
             "gap threshold " + shortest_number(options_.gap_threshold_s) + " s must be > 0", 0);
+    if (!(options_.max_gap_s > 0) || !std::isfinite(options_.max_gap_s))
+        throw RecordingError("the longest gap between rows " + shortest_number(options_.max_gap_s) +
+                                 " s must be a positive, finite number",
+                             0);
 }
 
 Recording RecordingReader::read_file(const std::string& path) const {
@@ -182,6 +200,8 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
     if (!std::getline(in, text))
         throw RecordingError(prefix + "line 1: the file is empty (expected the header)", 1);
     if (!text.empty() && text.back() == '\r') text.pop_back();
+    // A UTF-8 byte-order mark (some spreadsheets write one) is not part of the first column's name.
+    if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
 
     // --- header: every schema column once, extra columns only with the x_ prefix -------------------
     const std::vector<std::string> header = split_cells(text);
@@ -191,7 +211,8 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
     for (std::size_t i = 0; i < header.size(); ++i) {
         const std::string& name = header[i];
         if (!seen.emplace(name, i).second)
-            throw RecordingError(prefix + "line 1: column '" + name + "' appears twice", 1);
+            throw RecordingError(prefix + "line 1: column " + quote_text(name) + " appears twice",
+                                 1);
         bool known = false;
         for (std::size_t c = 0; c < columns.size(); ++c) {
             if (columns[c] == name) {
@@ -205,10 +226,9 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
             extra_positions.push_back(i);
             continue;
         }
-        throw RecordingError(
-            prefix + "line 1: unknown column '" + name +
-                "' (extra columns are allowed only with a name starting with 'x_')",
-            1);
+        throw RecordingError(prefix + "line 1: unknown column " + quote_text(name) +
+                                 " (extra columns are allowed only with a name starting with 'x_')",
+                             1);
     }
     std::string missing;
     for (std::size_t c = 0; c < columns.size(); ++c)
@@ -219,6 +239,11 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
     // --- rows --------------------------------------------------------------------------------------
     std::size_t line = 1;
     std::string previous_time_text;
+    // The bound in µs; beyond the largest time a recording holds it bounds nothing.
+    const std::int64_t max_gap_us =
+        options_.max_gap_s * 1e6 >= static_cast<double>(RecordingLimits::time_max_us)
+            ? RecordingLimits::time_max_us
+            : std::llround(options_.max_gap_s * 1e6);
     while (std::getline(in, text)) {
         ++line;
         if (!text.empty() && text.back() == '\r') text.pop_back();
@@ -239,6 +264,14 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
             parser.fail("", "time_s " + parser.cell(kTimeColumn) + " is not later than line " +
                                 std::to_string(recording.row_lines.back()) + "'s " +
                                 previous_time_text);
+        if (!recording.rows.empty() && row.time_us - recording.rows.back().time_us > max_gap_us)
+            parser.fail("", "time_s " + parser.cell(kTimeColumn) + " is " +
+                                format_time_s(row.time_us - recording.rows.back().time_us) +
+                                " s after line " + std::to_string(recording.row_lines.back()) +
+                                "'s " + previous_time_text + ": a gap between rows longer than " +
+                                shortest_number(options_.max_gap_s) +
+                                " s is refused (a run would step across all of it; --max-gap-s "
+                                "raises the bound)");
         previous_time_text = parser.cell(kTimeColumn);
 
         if (parser.group_present(kForceColumn, 2))

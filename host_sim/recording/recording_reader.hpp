@@ -1,7 +1,9 @@
 #pragma once
 // Reading a recording CSV strictly (host_sim/recording/RECORDING.md).  Every problem that makes
 // the file unusable is a RecordingError naming the 1-based line (and the column where there is
-// one); problems a command can live with are findings: gaps in the handle signals.
+// one), quoting a cell or a column name with at most 80 characters; problems a command can live
+// with are findings: gaps in the handle signals.  A time step between two rows longer than
+// max_gap_s is refused: a command would step the box (or the model) across all of it.
 #include <cstddef>
 #include <istream>
 #include <string>
@@ -34,8 +36,12 @@ struct Recording {
     std::vector<RecordingGap> gaps;  ///< findings (RecordingReaderOptions::gap_threshold_s)
 };
 
+/// The longest time between two rows a reader accepts by default [s].
+inline constexpr double kDefaultMaxGap_s = 60.0;
+
 struct RecordingReaderOptions {
-    double gap_threshold_s = 0.05;  ///< a handle signal silent for longer than this is a gap
+    double gap_threshold_s = 0.05;        ///< a handle signal silent for longer than this is a gap
+    double max_gap_s = kDefaultMaxGap_s;  ///< two rows further apart than this: refused
 };
 
 class RecordingReader {

@@ -4,6 +4,7 @@
 #include <deque>
 #include <fstream>
 #include <memory>
+#include <span>
 #include <sstream>
 
 #include "executive/sensor_box.hpp"
@@ -13,9 +14,19 @@
 namespace scopekin::host_sim {
 namespace {
 
-/// A CAN bus that hands the box the log's frames and keeps what the box sends.
+/// A CAN bus that hands the box the log's frames and keeps what the box sends.  It holds back
+/// the frames the box's receive filter does not pass, as the kernel does for scopekin-box.
 class ReplayCanBus final : public hal::CanBus {
 public:
+    hal::CanStatus set_receive_filter(std::span<const hal::CanIdFilter> filters) override {
+        return filter_.assign(filters) ? hal::CanStatus::ok : hal::CanStatus::invalid;
+    }
+    /// Queues a frame of the log for the box; false if the box's filter holds it back.
+    bool offer(const hal::CandumpRecord& record) {
+        if (!filter_.passes(record.frame)) return false;
+        queue.push_back({record.frame, record.timestamp_us});
+        return true;
+    }
     hal::CanStatus send(const hal::CanFrame& frame, std::uint32_t /*timeout_us*/) override {
         sent.push_back(frame);
         ++counters_.sent;
@@ -35,11 +46,29 @@ public:
 
 private:
     hal::CanCounters counters_{};
+    hal::CanReceiveFilter filter_{};
 };
 
 bool compared_output(std::uint32_t id) {
     return id == protocol::kKineticEstimateId || id == protocol::kContactSummaryId ||
            id == protocol::kAlarmsId || id == protocol::kStationForcesId;
+}
+
+/// A candump time stamp as the log writes it: seconds.microseconds.
+std::string stamp_text(std::uint64_t time_us) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%llu.%06llu", static_cast<unsigned long long>(time_us / 1000000U),
+                  static_cast<unsigned long long>(time_us % 1000000U));
+    return b;
+}
+
+/// A duration in µs as exact seconds, trailing zeros dropped ("60", "0.0005", "1000000000").
+std::string seconds_text(std::uint64_t duration_us) {
+    std::string text = stamp_text(duration_us);
+    while (text.back() == '0')
+        text.pop_back();
+    if (text.back() == '.') text.pop_back();
+    return text;
 }
 
 std::string frame_text(const hal::CanFrame& f) {
@@ -62,7 +91,29 @@ bool is_box_output_id(std::uint32_t id) {
            id == protocol::kBoxCountersId || id == protocol::kStationForcesId;
 }
 
-CandumpLog read_candump_log(const std::string& path) {
+/// A frame the box receives (anything but the box's own outputs).
+bool is_input(const hal::CandumpRecord& r) {
+    return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
+}
+
+namespace {
+
+/// Refuses line `number` (time stamp `now`) for its relation to record `previous` of `log`.
+[[noreturn]] void refuse_time_stamp(const std::string& path, const CandumpLog& log,
+                                    std::size_t previous, std::size_t number, std::uint64_t now,
+                                    const char* relation, const std::string& reason) {
+    const std::uint64_t before = log.records[previous].timestamp_us;
+    const std::uint64_t apart = now > before ? now - before : before - now;
+    throw CandumpLineError(path + ": line " + std::to_string(number) + ": time stamp " +
+                               stamp_text(now) + " is " + seconds_text(apart) + relation +
+                               " line " + std::to_string(log.lines[previous]) + "'s " +
+                               stamp_text(before) + ": " + reason,
+                           number);
+}
+
+}  // namespace
+
+CandumpLog read_candump_log(const std::string& path, const CandumpReadOptions& options) {
     std::ifstream in(path);
     if (!in) throw CandumpLineError(path + ": cannot be read", 0);
     CandumpLog log;
@@ -78,12 +129,13 @@ CandumpLog read_candump_log(const std::string& path) {
                 path + ": line " + std::to_string(number) + ": " + hal::describe(parse) +
                     " (expected candump -L format: '(1700000000.123456) can0 110#0102030405')",
                 number);
-        if (!log.records.empty() &&
-            record.timestamp_us + 1000000U < log.records.back().timestamp_us)
-            throw CandumpLineError(
-                path + ": line " + std::to_string(number) +
-                    ": the timestamp goes back by more than 1 s (two recordings in one file?)",
-                number);
+        if (!log.records.empty() && record.timestamp_us > log.records.back().timestamp_us &&
+            record.timestamp_us - log.records.back().timestamp_us > options.max_gap_us)
+            refuse_time_stamp(
+                path, log, log.records.size() - 1U, number, record.timestamp_us, " s after",
+                "longer than the largest gap, --max-gap-s " + seconds_text(options.max_gap_us) +
+                    " s (a replay runs the box every 5 ms across it; raise "
+                    "--max-gap-s if the pause is real)");
         if (!record.frame.error && !record.frame.extended &&
             record.frame.id == protocol::kKineticEstimateId)
             log.box_log = true;
@@ -91,6 +143,21 @@ CandumpLog read_candump_log(const std::string& path) {
         log.lines.push_back(number);
     }
     if (log.records.empty()) throw CandumpLineError(path + ": no CAN frames in the log", 0);
+    // Time order.  A sensor log: no line before the one above it.  A box log: the frames the box
+    // received in time order, and its own frames (stamped with their period's time, which the
+    // recorder takes before it reads that period's frames) in time order; only the two may
+    // interleave out of order.
+    std::size_t last[2] = {log.records.size(), log.records.size()};  // [input, output]
+    for (std::size_t i = 0; i < log.records.size(); ++i) {
+        const std::size_t stream = log.box_log && !is_input(log.records[i]) ? 1U : 0U;
+        const std::size_t previous = last[stream];
+        if (previous < i && log.records[i].timestamp_us < log.records[previous].timestamp_us)
+            refuse_time_stamp(path, log, previous, log.lines[i], log.records[i].timestamp_us,
+                              " s before",
+                              "a candump log must be in time order (equal time stamps are fine; "
+                              "a reversed, shuffled or spliced log is not one recording)");
+        last[stream] = i;
+    }
     return log;
 }
 
@@ -110,9 +177,6 @@ ReplayResult replay_candump(const CandumpLog& log,
         ++result.periods;
         if (on_period) on_period({time_us, &box->outputs(), box->box_faults()});
     };
-    auto is_input = [](const hal::CandumpRecord& r) {
-        return r.frame.error || r.frame.extended || !is_box_output_id(r.frame.id);
-    };
 
     if (log.box_log) {
         std::size_t i = 0;
@@ -120,8 +184,7 @@ ReplayResult replay_candump(const CandumpLog& log,
         while (i < n) {
             const hal::CandumpRecord& r = log.records[i];
             if (is_input(r)) {
-                bus->queue.push_back({r.frame, r.timestamp_us});
-                ++result.frames_fed;
+                ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
                 ++i;
                 continue;
             }
@@ -171,8 +234,7 @@ ReplayResult replay_candump(const CandumpLog& log,
             run(next);
             next += kBoxPeriodUs;
         }
-        bus->queue.push_back({r.frame, r.timestamp_us});
-        ++result.frames_fed;
+        ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
     }
     run(next);
     return result;

@@ -10,6 +10,16 @@
 //    overrun and bus counters, which a replay cannot have).
 //  * a sensor log (no 0x181): the handle sensors' frames only; the box runs every 5 ms from the
 //    first frame's time, each period after the frames stamped at or before it.
+// Either way the box gets only the frames its receive filter passes (the handle sensors' 0x110
+// and 0x111, and error frames: SensorBox sets the filter at init), as the kernel filters them
+// for scopekin-box; the rest are counted in ReplayResult::frames_filtered.
+// The reader takes a log only in time order: in a sensor log no time stamp may be earlier than
+// the line before it (equal is fine); in a box log the received frames and the box's own frames
+// are each in time order (the box's frames carry their period's time, taken before the period
+// read its frames, so they may be stamped a little before the received lines above them).  No
+// gap between two lines may be longer than CandumpReadOptions::max_gap_us (`--max-gap-s`,
+// default 60 s), so a replay runs at most max_gap_us / 5 ms periods per line: never an endless
+// run or unbounded output.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -36,13 +46,22 @@ struct CandumpLog {
     bool box_log = false;
 };
 
-/// Reads a candump log; throws CandumpLineError (naming the line) for a malformed line, and for
-/// timestamps that go backwards by more than 1 s (not one recording).
-CandumpLog read_candump_log(const std::string& path);
+/// The largest gap between two lines `--max-gap-s` may allow: one hour (720,000 periods).
+inline constexpr double kMaxGapLimit_s = 3600.0;
+
+struct CandumpReadOptions {
+    /// Longest accepted time between two consecutive lines (`--max-gap-s`; default 60 s).
+    std::uint64_t max_gap_us = 60'000'000;
+};
+
+/// Reads a candump log; throws CandumpLineError (naming the file and line) for a malformed line,
+/// a time stamp earlier than the line before it, and a gap longer than options.max_gap_us.
+CandumpLog read_candump_log(const std::string& path, const CandumpReadOptions& options = {});
 
 struct ReplayResult {
     std::uint64_t periods = 0;
-    std::uint64_t frames_fed = 0;
+    std::uint64_t frames_fed = 0;       ///< frames given to the box
+    std::uint64_t frames_filtered = 0;  ///< frames its receive filter held back (foreign ids)
     std::uint64_t compared_frames = 0;  ///< box log: recorded output frames compared
     std::uint64_t differing_frames = 0;
     std::string first_difference;  ///< empty if none
@@ -54,5 +73,7 @@ ReplayResult replay_candump(const CandumpLog& log,
 
 /// True for the ids the box sends.
 bool is_box_output_id(std::uint32_t id);
+/// True for a frame the box receives: anything but the box's own frames.
+bool is_input(const hal::CandumpRecord& record);
 
 }  // namespace scopekin::host_sim

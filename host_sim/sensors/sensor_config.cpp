@@ -206,13 +206,15 @@ SensorSuiteConfig read_sensor_config(const nlohmann::json& json, const std::stri
                 bool known = false;
                 for (std::size_t s = 0; s < kEmSensorNames.size(); ++s) {
                     if (name != kEmSensorNames[s]) continue;
-                    if (m.sensors[s]) throw ModelError(field + ": '" + name + "' is listed twice");
+                    if (m.sensors[s])
+                        throw ModelError(field + ": " + model::io::quote_text(name) +
+                                         " is listed twice");
                     m.sensors[s] = true;
                     known = true;
                 }
                 if (!known)
-                    throw ModelError(field + ": unknown EM sensor '" + name +
-                                     "' (known: tip, 20cm, handle, sigmoid)");
+                    throw ModelError(field + ": unknown EM sensor " + model::io::quote_text(name) +
+                                     " (known: tip, 20cm, handle, sigmoid)");
             }
         }
         m.position_noise_mm = o.number_or("position_noise_mm", m.position_noise_mm);

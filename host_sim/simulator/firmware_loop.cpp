@@ -24,6 +24,12 @@ FirmwareLoop::~FirmwareLoop() = default;
 
 void FirmwareLoop::deliver(const recording::RecordingRow& row) {
     const auto time_us = static_cast<std::uint64_t>(row.time_us);
+    if (!started_) {
+        started_ = true;
+        // Switched on with the first row: the first period is the first release at or after it.
+        if (next_period_us_ < time_us)
+            next_period_us_ = (time_us + period_us_ - 1) / period_us_ * period_us_;
+    }
     while (next_period_us_ < time_us)
         run_period(next_period_us_);
     feeder_->feed(row);  // advances the clock to the row's time

@@ -5,9 +5,12 @@
 // `scopekin simulate` and read back by `scopekin run` gives bit-identical firmware outputs.
 //
 // Time. Rows carry their arrival time (us). The box's periods are released at k * period_us
-// (k = 1, 2, ...). A period at T runs once every row with time <= T has been delivered: before a
-// row later than T is delivered, and in finish(). The clock stands at the row's time while its
-// frames are sent, so the drivers time-stamp them as a real CAN controller would.
+// (k = 1, 2, ...), from the first row on: the box is switched on with the first row, so a
+// recording that starts late (a logger's clock at 500 s) runs its own periods, not every empty
+// one from 0. A period at T runs once every row with time <= T has been delivered: before a row
+// later than T is delivered, and in finish(). The clock stands at the row's time while its
+// frames are sent, so the drivers time-stamp them as a real CAN controller would. Every period
+// between two rows runs (the readers bound the time between rows: --max-gap-s).
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -65,6 +68,7 @@ private:
     std::uint32_t period_us_;
     std::uint64_t next_period_us_;
     std::uint64_t periods_ = 0;
+    bool started_ = false;  ///< a row has been delivered
     bool estimator_ok_ = false;
     PublishedFrames published_;
     std::unique_ptr<hal::SimulatedClock> clock_;

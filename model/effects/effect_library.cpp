@@ -50,8 +50,8 @@ std::shared_ptr<const WorldEffect> make_world_effect(const nlohmann::json& spec,
     const std::string name = o.string("name");
     for (const Entry& e : kEffects)
         if (name == e.name) return e.read(o);
-    throw ModelError(o.field("name") + ": unknown truth effect '" + name +
-                     "' (known: " + known_list() + ")");
+    throw ModelError(o.field("name") + ": unknown truth effect " + io::quote_text(name) +
+                     " (known: " + known_list() + ")");
 }
 
 std::vector<std::shared_ptr<const WorldEffect>> read_world_effects(const nlohmann::json& list,

@@ -12,8 +12,8 @@ namespace {
 BeamSection read_section(const nlohmann::json& value, const std::string& path) {
     if (value.is_string()) {
         if (value.get<std::string>() == "cf_q160l") return cf_q160l::section();
-        throw ModelError(path + ": unknown section name '" + value.get<std::string>() +
-                         "' (known: cf_q160l)");
+        throw ModelError(path + ": unknown section name " + quote_text(value.get<std::string>()) +
+                         " (known: cf_q160l)");
     }
     const JsonObject o(value, path);
     o.allow_only({"EA_N", "EI_Nmm2", "EI_y_Nmm2", "EI_z_Nmm2", "GJ_Nmm2", "kappa_GA_N",

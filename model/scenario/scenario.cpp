@@ -36,8 +36,8 @@ ColonRegion read_region(const JsonObject& o, const char* key) {
     const std::string name = o.string(key);
     const auto region = region_from_name(name);
     if (!region)
-        throw ModelError(o.field(key) + ": unknown region '" + name + "' (known: " + region_list() +
-                         ")");
+        throw ModelError(o.field(key) + ": unknown region " + io::quote_text(name) +
+                         " (known: " + region_list() + ")");
     return *region;
 }
 
@@ -77,8 +77,8 @@ ScopeSpec read_scope(const JsonObject& o, std::string& model) {
     o.allow_only({"model", "length_mm", "elements", "bending_stiffness_Nmm2", "radius_mm"});
     model = o.string("model");
     if (model != "cf_q160l")
-        throw ModelError(o.field("model") + ": unknown scope model '" + model +
-                         "' (known: cf_q160l)");
+        throw ModelError(o.field("model") + ": unknown scope model " + io::quote_text(model) +
+                         " (known: cf_q160l)");
     ScopeSpec s;
     s.length_mm = positive_or(o, "length_mm", cf_q160l::kWorkingLength_mm);
     s.elements = o.index_or("elements", 170);
@@ -121,8 +121,9 @@ ColonTube read_colon(const JsonObject& o, double scope_radius_mm) {
                                    read_region_or(o, "region", ColonRegion::sigmoid),
                                    scope_radius_mm);
             }
-            throw ModelError(o.field("bundled") + ": unknown bundled colon '" + name +
-                             "' (known: default, straight_tube, single_bend)");
+            throw ModelError(o.field("bundled") + ": unknown bundled colon " +
+                             io::quote_text(name) +
+                             " (known: default, straight_tube, single_bend)");
         }
         o.allow_only({"waypoints", "spacing_mm"});
         const nlohmann::json& list = o.array("waypoints");
@@ -185,8 +186,8 @@ ProcedureAction read_action(const JsonObject& o) {
         a.amplitude_mm = o.number("amplitude_mm");
         a.frequency_Hz = o.number("frequency_Hz");
     } else {
-        throw ModelError(o.field("action") + ": unknown action '" + name +
-                         "' (known: advance, withdraw, hold, push, twist, rotate, dither)");
+        throw ModelError(o.field("action") + ": unknown action " + io::quote_text(name) +
+                         " (known: advance, withdraw, hold, push, twist, rotate, dither)");
     }
     return a;
 }
@@ -385,8 +386,8 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
                 else if (a == "mesentery")
                     p.attachment = ColonAttachment::mesentery;
                 else
-                    throw ModelError(r.field("attachment") + ": unknown attachment '" + a +
-                                     "' (known: fixed, mesentery)");
+                    throw ModelError(r.field("attachment") + ": unknown attachment " +
+                                     io::quote_text(a) + " (known: fixed, mesentery)");
             }
             p.mesentery_stiffness_N_per_mm2 = non_negative_or(r, "mesentery_stiffness_N_per_mm2",
                                                               p.mesentery_stiffness_N_per_mm2);
@@ -464,8 +465,9 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
                         throw ModelError(at + ": must be a region name (string)");
                     const auto region = region_from_name(names[r].get<std::string>());
                     if (!region)
-                        throw ModelError(at + ": unknown region '" + names[r].get<std::string>() +
-                                         "' (known: " + region_list() + ")");
+                        throw ModelError(at + ": unknown region " +
+                                         io::quote_text(names[r].get<std::string>()) +
+                                         " (known: " + region_list() + ")");
                     window.regions.push_back(*region);
                 }
                 if (window.regions.empty())

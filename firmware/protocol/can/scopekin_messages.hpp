@@ -130,8 +130,9 @@ enum class BoxCounterIndex : std::uint8_t {
     period_overruns = 13,
     steps = 14,
     sensor_status = 15,
+    receive_backlog = 16,  ///< periods with BoxFault kBoxFaultReceiveBacklog
 };
-inline constexpr std::uint8_t kBoxCounterCount = 16;
+inline constexpr std::uint8_t kBoxCounterCount = 17;
 
 struct BoxCounter {
     BoxCounterIndex index{BoxCounterIndex::can_received};

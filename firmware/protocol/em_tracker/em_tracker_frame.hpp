@@ -168,7 +168,7 @@ struct EmTrackerFramerCounters {
 };
 
 /// Ring capacity of the framer, bytes.  Any capacity >= kEmTrackerMaxFrameSize works; 256 holds
-/// the driver's 64-byte reads plus a partial frame with room to spare.
+/// the driver's 128-byte reads plus a partial frame with room to spare.
 inline constexpr std::size_t kEmTrackerFramerCapacity = 256;
 
 /// Incremental framer: push bytes in, take complete, validated frames out.

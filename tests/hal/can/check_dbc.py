@@ -37,7 +37,7 @@ TYPED codecs protocol::encode(const T&) / protocol::decode(frame, T&) through th
       3. canmatrix's decode of the C++ bytes gives back the raw values and raw * factor.
 (c) Refusals: every wrong length 0..8 -> bad_length; extended, remote and error frames ->
     not_data; the other messages' ids and unknown ids -> wrong_id; every undefined enumeration
-    value (BoxState 4..15, ContactForceLevel 3, CounterIndex 16..255: read from the DBC's VAL_
+    value (BoxState 4..15, ContactForceLevel 3, CounterIndex 17..255: read from the DBC's VAL_
     tables) -> out_of_range.  Each refusal must leave the output untouched.
 
 Prints a summary; exits 1 on any mismatch, naming message, signal, value and both results.
@@ -74,7 +74,7 @@ MAX_REPORTED_PER_KIND = 5
 EXPECTED_UNDEFINED = {
     ("BoxStatus", "BoxState"): range(4, 16),
     ("Alarms", "ContactForceLevel"): range(3, 4),
-    ("BoxCounters", "CounterIndex"): range(16, 256),
+    ("BoxCounters", "CounterIndex"): range(17, 256),
 }
 
 

@@ -204,7 +204,7 @@ SCOPEKIN_TEST(CanProtocol, DecodingIsStrict) {
     protocol::Alarms alarms{};
     SCOPEKIN_EXPECT_TRUE(protocol::decode(level, alarms) == protocol::DecodeResult::out_of_range);
     CanFrame index = protocol::encode(protocol::BoxCounter{});
-    index.data[0] = 16;
+    index.data[0] = 17;  // the first index the DBC does not define
     protocol::BoxCounter counter{};
     SCOPEKIN_EXPECT_TRUE(protocol::decode(index, counter) == protocol::DecodeResult::out_of_range);
 }

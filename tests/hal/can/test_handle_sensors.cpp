@@ -56,7 +56,8 @@ SCOPEKIN_TEST(HandleSensors, ValidSamplesAreFreshOncePerPeriod) {
 }
 
 SCOPEKIN_TEST(HandleSensors, StaleAfterTheTimeoutAndRecovers) {
-    drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000}};
+    // Periods up to 12 ms apart here: samples up to 15 ms old count as fresh (not late).
+    drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000, 15000}};
     // Never seen: stale from the start.
     (void)sensors.take_samples(1000);
     SCOPEKIN_EXPECT_EQ(sensors.faults(),
@@ -110,4 +111,55 @@ SCOPEKIN_TEST(HandleSensors, FaultsAreCountedAndTheHeldSampleKept) {
     (void)sensors.accept(force_frame(7, 5, 6000));
     (void)sensors.take_samples(10000);
     SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultEncoderStale);
+}
+
+// A sample is fresh only if it is new AND received at most max_sample_age_us (one period)
+// before the period: one read late from a backlog is held, counted and flagged.
+SCOPEKIN_TEST(HandleSensors, ASampleOlderThanAPeriodIsNotFresh) {
+    drivers::HandleSensors sensors{drivers::HandleSensorConfig{15000, 5000}};
+    (void)sensors.accept(force_frame(1, 0, 4000));
+    (void)sensors.accept(insertion_frame(100, 0, 4000));
+    messages::HandleSamples samples = sensors.take_samples(5000);
+    SCOPEKIN_EXPECT_TRUE(samples.force_torque_fresh && samples.insertion_roll_fresh);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    // The next period reads samples of 4.999 ms and 5.001 ms before it: the first is fresh, the
+    // second (read late, as from a backlog) is held: not fresh, counted, flagged.
+    (void)sensors.accept(force_frame(2, 1, 5001));
+    (void)sensors.accept(insertion_frame(101, 1, 4999));
+    samples = sensors.take_samples(10000);
+    SCOPEKIN_EXPECT_TRUE(samples.force_torque_fresh);
+    SCOPEKIN_EXPECT_TRUE(!samples.insertion_roll_fresh);
+    SCOPEKIN_EXPECT_EQ(samples.insertion_roll.insertion_mm.raw(), Q16_16::from_int(101).raw());
+    SCOPEKIN_EXPECT_EQ(sensors.counters().late_samples, 1U);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), messages::kBoxFaultReceiveBacklog);  // not yet stale
+    // A timely sample again: fresh, the flag gone.
+    (void)sensors.accept(insertion_frame(102, 2, 14000));
+    samples = sensors.take_samples(15000);
+    SCOPEKIN_EXPECT_TRUE(samples.insertion_roll_fresh);
+    SCOPEKIN_EXPECT_EQ(sensors.faults(), 0);
+    SCOPEKIN_EXPECT_EQ(sensors.counters().late_samples, 1U);
+}
+
+SCOPEKIN_TEST(HandleSensors, ItsReceiveFiltersPassExactlyItsFrames) {
+    scopekin::hal::CanReceiveFilter filter{};
+    SCOPEKIN_EXPECT_TRUE(filter.assign(drivers::kHandleSensorReceiveFilters));
+    SCOPEKIN_EXPECT_TRUE(filter.passes(force_frame(1, 0, 0).frame));
+    SCOPEKIN_EXPECT_TRUE(filter.passes(insertion_frame(1, 0, 0).frame));
+    ReceivedCanFrame other = force_frame(1, 0, 0);
+    for (std::uint32_t id = 0; id <= scopekin::hal::kCanStandardIdMask; ++id) {  // bound: 2048
+        other.frame.id = id;
+        const bool handle =
+            id == protocol::kHandleForceTorqueId || id == protocol::kInsertionRollId;
+        SCOPEKIN_EXPECT_EQ(filter.passes(other.frame), handle);
+    }
+    other.frame.id = protocol::kHandleForceTorqueId;
+    other.frame.extended = true;  // the same number as a 29-bit id
+    SCOPEKIN_EXPECT_TRUE(!filter.passes(other.frame));
+    other.frame.extended = false;
+    other.frame.remote = true;  // a remote request for it
+    SCOPEKIN_EXPECT_TRUE(!filter.passes(other.frame));
+    scopekin::hal::CanFrame error{};
+    error.error = true;
+    error.id = scopekin::hal::kCanErrorBusOff;
+    SCOPEKIN_EXPECT_TRUE(filter.passes(error));  // the controller's reports always pass
 }

@@ -1,6 +1,7 @@
 // EM tracker driver: conversions to mm / N (Q16.16), validation (unknown sensor, range,
 // quaternion norm, timestamps, device status), staleness and recovery, link and serial faults,
-// bounded reads, queue overflow, and a randomised hostile stream through a scripted SerialPort.
+// bytes with no sync, bounded reads, queue overflow, and a randomised hostile stream through a
+// scripted SerialPort.
 // Runs as GoogleTest on x86-64 / aarch64 and with portable_check's runner on Cortex-M4.
 #include <array>
 #include <cstddef>
@@ -409,6 +410,30 @@ SCOPEKIN_TEST(EmTrackerDriver, LinkFaultsAreFlaggedUntilTaken) {
     SCOPEKIN_EXPECT_EQ(g_driver.fault_flags(), std::uint32_t{messages::kEmFaultStale});
 }
 
+// Bytes that never start a frame (no sync byte at all) are discarded and flagged as such in the
+// call that saw them: a line of noise is a framing fault at once, not only a stale sensor later.
+SCOPEKIN_TEST(EmTrackerDriver, BytesWithNoSyncAreFlagged) {
+    reset();
+    std::array<std::uint8_t, 100> noise{};
+    for (std::size_t i = 0; i < noise.size(); ++i) {
+        noise[i] = static_cast<std::uint8_t>((i * 37U) & 0x7FU);  // never 0xA5
+    }
+    g_port.input.add(noise);
+    (void)g_driver.service(g_port, 0U);
+    SCOPEKIN_EXPECT_EQ(g_driver.counters().link.bytes_discarded, 100U);
+    std::uint32_t flags = g_driver.take_fault_flags();
+    SCOPEKIN_EXPECT_TRUE((flags & messages::kEmFaultNoSync) != 0U);
+    SCOPEKIN_EXPECT_EQ(flags & (messages::kEmFaultBadChecksum | messages::kEmFaultBadLength |
+                                messages::kEmFaultUnknownType),
+                       0U);  // no candidate frame at all
+    // A clean frame next: nothing discarded, no flag.
+    g_port.input.add_pose(spec_pose(0U, 1U));
+    (void)g_driver.service(g_port, 1U);
+    flags = g_driver.take_fault_flags();
+    SCOPEKIN_EXPECT_EQ(flags & messages::kEmFaultNoSync, 0U);
+    SCOPEKIN_EXPECT_EQ(g_driver.counters().link.frames_ok, 1U);
+}
+
 SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
     reset();
     g_port.input.add_pose(spec_pose(0U, 1U));
@@ -434,13 +459,14 @@ SCOPEKIN_TEST(EmTrackerDriver, SerialClosedAndFailedAreCountedAndFlagged) {
 
     // A full chunk followed by a hang-up: the bytes count, the hang-up too.
     reset();
-    for (std::uint32_t i = 0; i < 2U; ++i) {
-        g_port.input.add_pose(spec_pose(0U, 10U + i));  // 64 bytes: exactly one chunk
+    static_assert(EmTrackerDriver::kReadChunkBytes == 4U * 32U);
+    for (std::uint32_t i = 0; i < 4U; ++i) {
+        g_port.input.add_pose(spec_pose(0U, 10U + i));  // 128 bytes: exactly one chunk
     }
     g_port.when_empty = SerialStatus::closed;
     result = g_driver.service(g_port, 0U);
     SCOPEKIN_EXPECT_TRUE(result.status == SerialStatus::ok);
-    SCOPEKIN_EXPECT_EQ(result.samples, 2U);
+    SCOPEKIN_EXPECT_EQ(result.samples, 4U);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().serial_closed, 1U);
 }
 
@@ -454,7 +480,7 @@ SCOPEKIN_TEST(EmTrackerDriver, ServiceReadsABoundedNumberOfBytes) {
         EmTrackerDriver::kReadChunkBytes * EmTrackerDriver::kReadsPerService;
     SCOPEKIN_EXPECT_EQ(first.bytes_read, per_call);
     SCOPEKIN_EXPECT_EQ(g_port.reads, EmTrackerDriver::kReadsPerService);
-    SCOPEKIN_EXPECT_EQ(first.samples, 8U);  // 256 bytes = 8 poses exactly
+    SCOPEKIN_EXPECT_EQ(first.samples, 32U);  // 1024 bytes = 32 poses exactly
     std::size_t samples = first.samples;
     for (int call = 0; call < 10; ++call) {
         samples += g_driver.service(g_port, 0U).samples;
@@ -480,22 +506,22 @@ SCOPEKIN_TEST(EmTrackerDriver, ServiceReadsABoundedNumberOfBytes) {
 
 SCOPEKIN_TEST(EmTrackerDriver, QueueOverflowDropsTheOldest) {
     reset();
-    static std::array<std::uint8_t, 40 * 32> stream{};
+    static std::array<std::uint8_t, 80 * 32> stream{};
     std::size_t size = 0;
-    for (std::uint32_t i = 0; i < 40U; ++i) {
+    for (std::uint32_t i = 0; i < 80U; ++i) {
         size += scopekin::protocol::encode_em_pose(spec_pose(1U, 1000U + i),
                                                    std::span<std::uint8_t>{stream}.subspan(size));
     }
-    SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 40U);
+    SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 80U);
     SCOPEKIN_EXPECT_EQ(g_driver.queued(), EmTrackerDriver::kSampleQueueCapacity);
     SCOPEKIN_EXPECT_EQ(g_driver.counters().samples_dropped,
-                       40U - EmTrackerDriver::kSampleQueueCapacity);
+                       80U - EmTrackerDriver::kSampleQueueCapacity);
     SCOPEKIN_EXPECT_TRUE((g_driver.fault_flags() & messages::kEmFaultQueueOverflow) != 0U);
     SCOPEKIN_EXPECT_TRUE(g_driver.pop(g_sample));
     SCOPEKIN_EXPECT_EQ(g_sample.pose.device_time_us,
-                       1000U + 40U - EmTrackerDriver::kSampleQueueCapacity);
+                       1000U + 80U - EmTrackerDriver::kSampleQueueCapacity);
     // The latest value is the newest sample, whatever the queue dropped.
-    SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::twenty_cm).device_time_us, 1039U);
+    SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::twenty_cm).device_time_us, 1079U);
 }
 
 // --- Randomised hostile stream through a scripted port --------------------------------------------

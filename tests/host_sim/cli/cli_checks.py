@@ -2,7 +2,9 @@
 """End-to-end checks of the scopekin command line (tests/host_sim/cli/CMakeLists.txt).
 
 usage: cli_checks.py CHECK SCOPEKIN WORK_DIR [SOURCE_DIR]
-Every expectation is stated next to its check; a failure prints what differed and exits 1."""
+Every expectation is stated next to its check; a failure prints what differed and exits 1.
+The output_order check needs SCOPEKIN_RENAME_PROBE (rename_probe.c, built by CMake) in the
+environment."""
 import csv
 import json
 import os
@@ -22,8 +24,12 @@ def expect(condition, message):
         print("FAIL:", message)
 
 
-def run(*args, expect_status=0):
-    p = subprocess.run([SCOPEKIN, *args], capture_output=True, text=True)
+def run(*args, expect_status=0, cwd=None, env=None, timeout=600):
+    try:
+        p = subprocess.run([SCOPEKIN, *args], capture_output=True, text=True, errors="replace", cwd=cwd,
+                           env=env, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        raise SystemExit(f"scopekin {' '.join(a[:80] for a in args)}: still running after {timeout} s")
     if expect_status is not None and p.returncode != expect_status:
         print(p.stdout[-3000:], p.stderr[-3000:])
         raise SystemExit(f"scopekin {' '.join(args)}: exit {p.returncode}, expected {expect_status}")
@@ -207,8 +213,361 @@ def check_replay_bad_log():
     expect(s["kind"] == "sensor_log" and s["periods"] == 2 and s["frames_fed"] == 11, f"sensor log replay: {s}")
 
 
+SHORT = os.path.join(HERE, "data", "short_advance.json")
+
+
+def line_of(text, marker):
+    """The 1-based line of the first `marker` in `text`."""
+    return text[:text.index(marker)].count("\n") + 1
+
+
+def scenario_with(extra):
+    """short_advance.json with `extra` (JSON members) added before its closing brace."""
+    src = open(SHORT).read().rstrip()
+    return src[:-1].rstrip() + ",\n  " + extra + "\n}\n"
+
+
+def simulate_recording(name, procedure=None, seed=1):
+    """A recording written by `scopekin simulate` (short_advance.json, or its procedure replaced)."""
+    sim = fresh(name)
+    scenario = SHORT
+    if procedure is not None:
+        d = json.load(open(SHORT))
+        d["procedure"] = procedure
+        scenario = os.path.join(WORK, name + ".json")
+        json.dump(d, open(scenario, "w"))
+    run("simulate", scenario, "--out", sim, "--quiet", "--seed", str(seed))
+    return os.path.join(sim, "recording.csv")
+
+
+# 13 s of hand motion (the discrepancy workflow needs at least 12 s): advance, then withdraw.
+DISCREPANCY_PROCEDURE = [{"action": "advance", "start_s": 0, "end_s": 7, "speed_mm_per_s": 20},
+                         {"action": "withdraw", "start_s": 7, "end_s": 13, "speed_mm_per_s": 10}]
+
+
+def no_file_named(d, prefix):
+    hits = [os.path.join(r, f) for r, ds, fs in os.walk(d) for f in fs + ds if f.startswith(prefix)]
+    return hits == [], hits
+
+
+def check_shell_injection():
+    # An output folder whose name a shell would execute: the plot scripts get it as one argument
+    # (no shell), so nothing runs and the plots are drawn into it.
+    d = fresh("shell")
+    os.makedirs(d)
+    hostile = "x';touch PWNED;' $(touch PWNED2) `touch PWNED3` a b;c\"d"
+    p = run("demo", "--scenario", SHORT, "--out", hostile, "--quiet", cwd=d, expect_status=None)
+    expect(p.returncode == 0, f"demo into {hostile!r}: exit {p.returncode}: {p.stderr[-500:]}")
+    for name in ["forces.png", "advance.png", "snapshots.png", "summary.json"]:
+        expect(os.path.isfile(os.path.join(d, hostile, name)), f"demo wrote {name} into {hostile!r}")
+    ok, hits = no_file_named(d, "PWNED")
+    expect(ok, f"demo ran nothing from the folder name: {hits}")
+    rec = simulate_recording("shell_recording", DISCREPANCY_PROCEDURE)
+    hostile2 = "y';touch PWNED4;' $HOME"
+    p = run("discrepancy", rec, "--out", hostile2, "--quiet", cwd=d, expect_status=None)
+    expect(p.returncode == 0, f"discrepancy into {hostile2!r}: exit {p.returncode}: {p.stderr[-500:]}")
+    for name in ["outputs.png", "residuals.png", "candidates.png", "report.json"]:
+        expect(os.path.isfile(os.path.join(d, hostile2, name)), f"discrepancy wrote {name} into {hostile2!r}")
+    ok, hits = no_file_named(d, "PWNED")
+    expect(ok, f"discrepancy ran nothing from the folder name: {hits}")
+    # A folder name that starts with '-' is a folder, not an option of the plot script.
+    p = run("demo", "--scenario", SHORT, "--out", "-h", "--quiet", cwd=d, expect_status=None)
+    expect(p.returncode == 0 and os.path.isfile(os.path.join(d, "-h", "forces.png")),
+           f"demo into '-h': exit {p.returncode}: {p.stderr[-300:]}")
+
+
+def check_hostile_json():
+    # Deep nesting, numbers beyond double, a key twice: exit 2 naming the file, line and field,
+    # in a bounded message, nothing written; never a crash (exit 139) or exit 3.
+    d = fresh("hostile_json")
+    os.makedirs(d)
+
+    def refused(name, text, needles, command="simulate", files=None):
+        path = os.path.join(d, name + ".json")
+        open(path, "w").write(text)
+        for f, t in (files or {}).items():
+            open(os.path.join(d, f), "w").write(t)
+        out = os.path.join(d, name + "_out")
+        args = [command, path] if command != "discrepancy" else [command, REC, "--model", path]
+        if command != "static":
+            args += ["--out", out, "--quiet"]
+        p = run(*args, expect_status=None, timeout=120)
+        expect(p.returncode == 2, f"{name}: exit {p.returncode}, expected 2: {p.stderr[-300:]}")
+        for n in needles:
+            expect(n in p.stderr, f"{name}: the message names '{n}': {p.stderr[-400:]}")
+        expect(len(p.stderr) < 600, f"{name}: a bounded message ({len(p.stderr)} bytes)")
+        expect(not os.path.exists(out), f"{name}: nothing written")
+
+    REC = simulate_recording("hostile_json_recording", DISCREPANCY_PROCEDURE)
+    deep = scenario_with('"gravity_mm_per_s2": ' + "[" * 60000 + "]" * 60000)
+    refused("deep", deep, ["deep.json: line %d" % line_of(deep, "gravity"), "gravity_mm_per_s2[0][0]",
+                           "nested deeper than 64 levels"])
+    big = scenario_with('"gravity_mm_per_s2": [0, 1e400, 0]')
+    refused("big", big, ["big.json: line %d" % line_of(big, "1e400"), "gravity_mm_per_s2[1]", "'1e400'",
+                         "out of range"])
+    # In a model file a scenario names: the model file is named.
+    model = '{"colon": {"bundled": "default"},\n "scope": {"model": "cf_q160l", "length_mm": -1e999}}'
+    with_model = json.load(open(SHORT))
+    for k in ("colon", "scope"):
+        del with_model[k]
+    with_model["model"] = "big_model.json"
+    refused("uses_big_model", json.dumps(with_model), ["big_model.json: line 2", "scope.length_mm", "out of range"],
+            files={"big_model.json": model})
+    dup = scenario_with('"initial_insertion_mm": 30')
+    refused("duplicate", dup, ["duplicate.json: line %d" % line_of(dup, '"initial_insertion_mm": 30'),
+                               "initial_insertion_mm: key given twice",
+                               "first at line %d" % line_of(dup, '"initial_insertion_mm": 20')])
+    problem = open(os.path.join(SOURCE, "model", "problems", "mattiasson_tip_load.json")).read()
+    problem_dup = problem.replace('"static": {"load_steps": 10}', '"static": {"load_steps": 10, "load_steps": 11}')
+    refused("beam_duplicate", problem_dup, ["beam_duplicate.json: line %d" % line_of(problem_dup, '"load_steps": 11'),
+                                            "static.load_steps: key given twice"], command="static")
+    model_dup = '{"colon": {"bundled": "default"},\n "colon": {"bundled": "default"}}'
+    refused("model_duplicate", model_dup, ["model_duplicate.json: line 2", "colon: key given twice"],
+            command="discrepancy")
+    # A key of a megabyte is shown bounded.
+    refused("long_key", scenario_with('"' + "k" * (1 << 20) + '": 1'), ["(1048576 bytes): unknown key"])
+
+
+def check_time_gap():
+    # A row far later than the one before is refused with its line, instead of the box stepping a
+    # period every 5 ms across the gap (a row 10^9 s later once wrote 300 MB in 10 s).
+    rec = simulate_recording("gap_base")
+    lines = open(rec).read().splitlines()
+    d = fresh("gap")
+    os.makedirs(d)
+
+    def with_time(line, t):
+        cells = line.split(",")
+        cells[0] = "%.6f" % t
+        return ",".join(cells)
+
+    last_t = float(lines[-1].split(",")[0])
+    far = os.path.join(d, "far.csv")
+    write_lines(far, lines[:-1] + [with_time(lines[-1], 999999999.0)])
+    p = run("run", far, "--out", os.path.join(d, "far"), "--quiet", expect_status=2, timeout=60)
+    expect(f"line {len(lines)}" in p.stderr and "--max-gap-s" in p.stderr,
+           f"the gap is refused naming its line and the option: {p.stderr.strip()[:300]}")
+    expect(not os.path.exists(os.path.join(d, "far")), "nothing written for the refused recording")
+    # 100 s without a row: refused by default (60 s), run with --max-gap-s 200, every period stepped.
+    hundred = os.path.join(d, "hundred.csv")
+    write_lines(hundred, lines + [with_time(lines[-1], last_t + 100.0)])
+    run("run", hundred, "--out", os.path.join(d, "hundred"), "--quiet", expect_status=2)
+    run("run", hundred, "--out", os.path.join(d, "hundred"), "--quiet", "--max-gap-s", "200")
+    s = json.load(open(os.path.join(d, "hundred", "summary.json")))
+    expect(s["periods"] == round((last_t + 100.0) / 0.005), f"periods up to the last row: {s['periods']}")
+    # A recording that starts late (a logger's clock): the box starts with the first row and runs
+    # the periods of the recording only, not 100,000 empty ones from 0 s.
+    late = os.path.join(d, "late.csv")
+    write_lines(late, [lines[0]] + [with_time(l, float(l.split(",")[0]) + 500.0) for l in lines[1:]])
+    run("run", late, "--out", os.path.join(d, "late"), "--quiet", timeout=60)
+    s = json.load(open(os.path.join(d, "late", "summary.json")))
+    expect(s["periods"] == round(last_t / 0.005), f"a late start runs the recording's periods only: {s['periods']}")
+    fw = rows(os.path.join(d, "late", "firmware.csv"))
+    expect(float(fw[0]["time_s"]) > 500.0, f"the first period after the first row: {fw[0]['time_s']}")
+    # discrepancy: a 10^6 s gap is refused with its line, not looped over.
+    drec = simulate_recording("gap_discrepancy", DISCREPANCY_PROCEDURE)
+    dl = open(drec).read().splitlines()
+    far_d = os.path.join(d, "far_discrepancy.csv")
+    write_lines(far_d, dl + [with_time(dl[-1], float(dl[-1].split(",")[0]) + 1e6)])
+    p = run("discrepancy", far_d, "--out", os.path.join(d, "far_discrepancy"), "--quiet", "--no-plots",
+            expect_status=2, timeout=60)
+    expect(f"line {len(dl) + 1}" in p.stderr and "--max-gap-s" in p.stderr,
+           f"discrepancy refuses the gap naming its line: {p.stderr.strip()[:300]}")
+    # The option is checked: a bound must be a positive, finite number of seconds.
+    for bad in ["0", "-1", "nan", "inf"]:
+        p = run("run", rec, "--out", os.path.join(d, "bad"), "--max-gap-s", bad, expect_status=2)
+        expect("--max-gap-s" in p.stderr and len(p.stderr) < 300, f"--max-gap-s {bad}: {p.stderr.strip()}")
+
+
+def check_option_ranges():
+    # Integer options are not wrapped (-1 is not 2^64-1) and seconds are positive and finite,
+    # refused with a short message naming the option.
+    d = fresh("options")
+    rec = simulate_recording("options_recording")
+    cases = [
+        (["simulate", SHORT, "--out", os.path.join(d, "s"), "--seed", "-1"], "--seed"),
+        (["demo", "--scenario", SHORT, "--out", os.path.join(d, "demo"), "--seed", "-1"], "--seed"),
+        (["demo", "--scenario", SHORT, "--out", os.path.join(d, "demo"), "--seed", "18446744073709551616"], "--seed"),
+        (["batch", os.path.join(d, "manifest.txt"), "--out", os.path.join(d, "b"), "--seed", "-1"], "--seed"),
+        (["run", rec, "--out", os.path.join(d, "r"), "--gap-s", "-1"], "--gap-s"),
+        (["run", rec, "--out", os.path.join(d, "r"), "--gap-s", "nan"], "--gap-s"),
+        (["run", rec, "--out", os.path.join(d, "r"), "--gap-s", "inf"], "--gap-s"),
+        (["discrepancy", rec, "--out", os.path.join(d, "x"), "--fit-budget-s", "nan"], "--fit-budget-s"),
+        (["discrepancy", rec, "--out", os.path.join(d, "x"), "--fit-budget-s", "-1"], "--fit-budget-s"),
+        (["discrepancy", rec, "--out", os.path.join(d, "x"), "--threads", "-1"], "--threads"),
+    ]
+    os.makedirs(d, exist_ok=True)
+    write_lines(os.path.join(d, "manifest.txt"), ["x.json"])
+    open(os.path.join(d, "x.json"), "w").write("{}")
+    for args, option in cases:
+        p = run(*args, expect_status=None)
+        expect(p.returncode == 2, f"{' '.join(args[-2:])}: exit {p.returncode}, expected 2")
+        expect(option in p.stderr and len(p.stderr) < 300,
+               f"{' '.join(args[-2:])}: a short message naming {option}: {p.stderr.strip()[:400]}")
+    expect(not os.path.exists(os.path.join(d, "s")), "--seed -1: nothing simulated")
+
+
+def check_bom_and_long_lines():
+    # A UTF-8 byte-order mark before the header is skipped; a huge cell is quoted at most ~80
+    # characters with its length; 1e309 is out of range, not "not a number".
+    rec = simulate_recording("bom_base")
+    lines = open(rec).read().splitlines()
+    header = lines[0].split(",")
+    d = fresh("bom")
+    os.makedirs(d)
+    bom = os.path.join(d, "bom.csv")
+    write_lines(bom, ["\ufeff" + lines[0]] + lines[1:])
+    run("run", bom, "--out", os.path.join(d, "bom"), "--quiet")
+    plain = fresh("bom_plain")
+    run("run", rec, "--out", plain, "--quiet")
+    expect(open(os.path.join(d, "bom", "firmware.csv"), "rb").read() == open(os.path.join(plain, "firmware.csv"), "rb").read(),
+           "a recording with a byte-order mark runs as the same recording without")
+    cells = lines[5].split(",")
+    cells[header.index("handle_force_N")] = "7" * (20 * 1024 * 1024)
+    long_line = os.path.join(d, "long.csv")
+    write_lines(long_line, lines[:5] + [",".join(cells)] + lines[6:])
+    p = run("run", long_line, "--out", os.path.join(d, "long"), "--quiet", expect_status=2)
+    expect(len(p.stderr) < 400, f"a 20 MB cell is not echoed whole ({len(p.stderr)} bytes of message)")
+    expect("line 6, column handle_force_N" in p.stderr and "…' (20971520 bytes)" in p.stderr,
+           f"the cell is quoted with its length: {p.stderr[:300]}")
+    cells = lines[5].split(",")
+    cells[header.index("handle_force_N")] = "1e309"
+    huge = os.path.join(d, "huge.csv")
+    write_lines(huge, lines[:5] + [",".join(cells)] + lines[6:])
+    p = run("run", huge, "--out", os.path.join(d, "huge"), "--quiet", expect_status=2)
+    expect("line 6, column handle_force_N: '1e309' is out of range" in p.stderr, f"1e309: {p.stderr.strip()}")
+    # An unknown column of a megabyte in the header.
+    wide = os.path.join(d, "wide.csv")
+    write_lines(wide, [lines[0] + "," + "c" * (1 << 20)] + [l + "," for l in lines[1:]])
+    p = run("run", wide, "--out", os.path.join(d, "wide"), "--quiet", expect_status=2)
+    expect(len(p.stderr) < 400 and "(1048576 bytes)" in p.stderr, f"a long column name is bounded: {p.stderr[:300]}")
+
+
+def check_box_faults():
+    # The box's own faults and counters reach firmware.csv and summary.json: a candump log whose
+    # handle force/torque frames skip one rolling counter value each (2,000 lost frames by the
+    # counters) shows 2,000 counter gaps, the counter_gap bit in the periods that saw them, and no
+    # such fault in a log without skips.
+    d = fresh("box_faults")
+    os.makedirs(d)
+
+    def frame(counter):  # HandleForceTorque (0x110): force 0, torque 0, status 0, counter in byte 5
+        return "110#00000000%02X%02X" % (0, counter & 0x0F)
+
+    def write_log(path, step):
+        write_lines(path, [f"({1700000000 + t // 1000000}.{t % 1000000:06d}) can0 {frame(k * step)}"
+                           for k, t in enumerate(range(0, 2001 * 1000, 1000))])
+
+    skipping = os.path.join(d, "skipping.log")
+    write_log(skipping, 2)
+    p = run("replay", skipping, "--out", os.path.join(d, "skipping"), "--quiet")
+    s = json.load(open(os.path.join(d, "skipping", "summary.json")))
+    box = s.get("box", {})
+    expect(box.get("handle_sensors", {}).get("counter_gaps") == 2000,
+           f"2,000 counter gaps counted: {json.dumps(box)[:600]}")
+    expect(box.get("fault_periods", {}).get("counter_gap", 0) >= 399,
+           f"counter_gap set in the periods that saw them (2 s / 5 ms): {box.get('fault_periods')}")
+    expect("counter_gap" in box.get("fault_first_s", {}), f"first time of counter_gap: {box.get('fault_first_s')}")
+    fw = rows(os.path.join(d, "skipping", "firmware.csv"))
+    expect(fw and "box_faults" in fw[0] and "tracker_faults" in fw[0], "firmware.csv has box_faults, tracker_faults")
+    with_gap = sum(1 for r in fw if int(r.get("box_faults", "0")) & (1 << 6))
+    expect(with_gap == box.get("fault_periods", {}).get("counter_gap"),
+           f"firmware.csv's counter_gap bit (1 << 6) in as many periods as summary.json says: {with_gap}")
+    expect("counter_gap" in p.stdout, f"replay prints the box faults it saw: {p.stdout.strip()[-400:]}")
+    steady = os.path.join(d, "steady.log")
+    write_log(steady, 1)
+    run("replay", steady, "--out", os.path.join(d, "steady"), "--quiet")
+    s = json.load(open(os.path.join(d, "steady", "summary.json")))
+    expect(s.get("box", {}).get("handle_sensors", {}).get("counter_gaps") == 0 and
+           "counter_gap" not in s.get("box", {}).get("fault_first_s", {"counter_gap": 0}),
+           f"no counter gap without skips: {json.dumps(s.get('box'))[:400]}")
+    # run and simulate carry the same columns and section.
+    rec = simulate_recording("box_faults_sim")
+    sim_dir = os.path.dirname(rec)
+    fw = rows(os.path.join(sim_dir, "firmware.csv"))
+    header = open(os.path.join(sim_dir, "firmware.csv")).readline().strip().split(",")
+    expect(header[-2:] == ["box_faults", "tracker_faults"], f"the new columns come last: {header[-3:]}")
+    expect(header[:13] == ["time_s", "step_index", "tip_path_mm", "tip_velocity_mm_per_s", "advance_efficiency",
+                           "active_stations", "max_contact_force_N", "max_contact_station", "max_contact_path_mm",
+                           "distal_sticking", "self_lock_alarm", "contact_force_level", "fault_flags"],
+           f"the old columns keep their order: {header[:13]}")
+    s = json.load(open(os.path.join(sim_dir, "summary.json")))
+    expect("box" in s and s["box"]["counters"]["periods"] == len(fw), f"simulate's box section: {str(s.get('box'))[:300]}")
+    expect(s["box"]["em_tracker"]["poses_ok"] > 0, "the EM tracker's poses are counted")
+
+
+def check_output_order():
+    # Every output is written as NAME.part and renamed when complete, summary.json (report.json,
+    # the shard summary) last of all: killed at any rename, a folder holds no summary, and every
+    # file it holds under its final name is complete. rename_probe.c logs the renames (of scopekin
+    # and of the plot scripts it starts) and kills scopekin at the N-th one.
+    probe = os.environ.get("SCOPEKIN_RENAME_PROBE")
+    if not probe or not os.path.isfile(probe):
+        raise SystemExit("SCOPEKIN_RENAME_PROBE must name the rename_probe library")
+    d = fresh("order")
+    os.makedirs(d)
+    rec = simulate_recording("order_recording")
+    drec = simulate_recording("order_discrepancy_recording", DISCREPANCY_PROCEDURE)
+    log_file = os.path.join(d, "sensors.log")
+    write_lines(log_file, [f"(1700000000.{t:06d}) can0 110#000000000000" for t in range(0, 100001, 1000)])
+    manifest = os.path.join(d, "manifest.txt")
+    shutil.copy(SHORT, os.path.join(d, "short_advance.json"))
+    write_lines(manifest, ["short_advance.json"])
+    commands = {
+        "simulate": (lambda out: ["simulate", SHORT, "--out", out, "--quiet"], "summary.json"),
+        "run": (lambda out: ["run", rec, "--out", out, "--quiet"], "summary.json"),
+        "replay": (lambda out: ["replay", log_file, "--out", out, "--quiet"], "summary.json"),
+        "demo": (lambda out: ["demo", "--scenario", SHORT, "--out", out, "--quiet"], "summary.json"),
+        "discrepancy": (lambda out: ["discrepancy", drec, "--out", out, "--quiet"], "report.json"),
+        "batch": (lambda out: ["batch", manifest, "--out", out, "--quiet"], "summary_shard_0_of_1.csv"),
+    }
+    for name, (args, summary) in commands.items():
+        log = os.path.join(d, name + ".log")
+
+        def probed(out, kill_at=None):
+            shutil.rmtree(out, ignore_errors=True)
+            if os.path.exists(log):
+                os.remove(log)
+            env = dict(os.environ, LD_PRELOAD=probe, SCOPEKIN_RENAME_LOG=log,
+                       ASAN_OPTIONS=os.environ.get("ASAN_OPTIONS", "") + ":verify_asan_link_order=0")
+            if kill_at is not None:
+                env["SCOPEKIN_RENAME_KILL_AT"] = str(kill_at)
+            p = subprocess.run([SCOPEKIN, *args(out)], capture_output=True, text=True, env=env)
+            renames = [l.split("\t") for l in open(log).read().splitlines()] if os.path.exists(log) else []
+            return p, renames
+
+        full = os.path.join(d, name + "_full")
+        p, renames = probed(full)
+        expect(p.returncode == 0, f"{name}: exit {p.returncode}: {p.stderr[-300:]}")
+        renamed = [os.path.relpath(to, full) for _, to in renames]
+        expect(renamed and renamed[-1] == summary, f"{name}: {summary} renamed last: {renamed}")
+        expect(all(f == t + ".part" for f, t in renames), f"{name}: every rename is NAME.part -> NAME: {renames}")
+        finals = sorted(os.path.relpath(os.path.join(r, f), full) for r, _, fs in os.walk(full) for f in fs)
+        expect(sorted(renamed) == finals, f"{name}: every output came by a rename: {finals} vs {sorted(renamed)}")
+        complete = {f: open(os.path.join(full, f), "rb").read() for f in finals}
+        # Killed at each rename scopekin itself makes (the plot scripts' are theirs): no summary,
+        # and every CSV under its final name is the complete one (the runs are deterministic).
+        own = [i + 1 for i, (_, t) in enumerate(renames) if not t.endswith(".png")]
+        for k in own:
+            out = os.path.join(d, f"{name}_killed_{k}")
+            p, _ = probed(out, kill_at=k)
+            expect(p.returncode == -9, f"{name} killed at rename {k}: exit {p.returncode}")
+            there = sorted(os.path.relpath(os.path.join(r, f), out) for r, _, fs in os.walk(out) for f in fs)
+            expect(summary not in there, f"{name} killed at rename {k}: no {summary}: {there}")
+            for f in there:
+                if f.endswith(".csv") and not f.startswith("summary_shard"):
+                    expect(open(os.path.join(out, f), "rb").read() == complete.get(f),
+                           f"{name} killed at rename {k}: {f} is complete")
+                elif f.endswith(".json"):
+                    json.load(open(os.path.join(out, f)))  # complete JSON (a truncated one raises)
+            shutil.rmtree(out, ignore_errors=True)
+
+
 CHECKS = {"replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
-          "bad_recordings": check_bad_recordings, "batch": check_batch}
+          "bad_recordings": check_bad_recordings, "batch": check_batch, "shell_injection": check_shell_injection,
+          "hostile_json": check_hostile_json, "time_gap": check_time_gap, "option_ranges": check_option_ranges,
+          "bom_and_long_lines": check_bom_and_long_lines, "box_faults": check_box_faults,
+          "output_order": check_output_order}
 os.makedirs(WORK, exist_ok=True)
 CHECKS[CHECK]()
 if failures:

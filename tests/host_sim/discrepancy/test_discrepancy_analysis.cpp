@@ -5,6 +5,7 @@
 // as a procedure.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -184,6 +185,28 @@ TEST(DiscrepancyFitWindows, OneWindowPerBlockAroundTheHandsMotion) {
     EXPECT_TRUE(in_set(d, 18.0, SampleSet::fit_held_out));  // block 1
     EXPECT_FALSE(in_set(d, 18.0, SampleSet::fit_training));
     EXPECT_TRUE(in_set(d, 9.5, SampleSet::training));  // the plain sets are unchanged
+}
+
+// A recording of 10^8 s (one with a gap that long, read with the bound raised) places its
+// windows with bounded work: at most kMaxWindowStarts candidate starts per block, spread over it,
+// so the motion still wins.
+TEST(DiscrepancyFitWindows, AVeryLongRecordingIsSearchedWithBoundedWork) {
+    MeasuredRecording d;
+    d.drive = {{0.0, 50.0, 0.0}, {13.0, 100.0, 0.0}, {1e8, 100.0, 0.0}};
+    d.start_s = 0.0;
+    d.end_s = 1e8;
+    d.duration_s = 1e8;
+    d.initial_insertion_mm = 50.0;
+    const auto started = std::chrono::steady_clock::now();
+    const std::vector<RunWindow> w = choose_fit_windows(d, 80.0);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    ASSERT_EQ(w.size(), 10u);
+    // The only motion is in the first 13 s: block 0's window starts where it is (0 s).
+    EXPECT_NEAR(w[0].start_s, 0.0, 1e-9);
+    // 10 blocks x 4001 starts x 160 samples: 0.06 s here. Every 0.25 s instead, 4 x 10^7 starts
+    // a block: about 10 minutes (6 s for 10^6 s).
+    EXPECT_LT(seconds, 30.0);
 }
 
 // A window restarted from the full run's saved state, with the same model, steps through the

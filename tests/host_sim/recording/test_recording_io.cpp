@@ -21,6 +21,7 @@ using scopekin::recording::Recording;
 using scopekin::recording::RecordingError;
 using scopekin::recording::RecordingGap;
 using scopekin::recording::RecordingReader;
+using scopekin::recording::RecordingReaderOptions;
 using scopekin::recording::RecordingRow;
 using scopekin::recording::RecordingWriter;
 using scopekin::recording::TipForceCells;
@@ -238,6 +239,75 @@ TEST(RecordingReader, ReadFileNamesTheFile) {
     }
     std::remove(path.c_str());
     EXPECT_THROW((void)RecordingReader().read_file(path), RecordingError);
+}
+
+TEST(RecordingReader, AByteOrderMarkBeforeTheHeaderIsSkipped) {
+    const Recording r = read("\xEF\xBB\xBF" + kHeader + "\n" + line("0") + "\n");
+    ASSERT_EQ(r.rows.size(), 1u);
+    EXPECT_EQ(r.rows[0].time_us, 0);
+}
+
+TEST(RecordingReader, NumbersBeyondDoubleAreOutOfRange) {
+    EXPECT_EQ(std::string(error_of(kHeader + "\n" + line("0", "1e309") + "\n").what()),
+              "line 2, column handle_force_N: '1e309' is out of range (a number's magnitude must "
+              "be below 1.8e308)");
+    EXPECT_EQ(std::string(error_of(kHeader + "\n" + line("0", "1", "-1e400") + "\n").what()),
+              "line 2, column handle_torque_Nmm: '-1e400' is out of range (a number's magnitude "
+              "must be below 1.8e308)");
+    // An underflow is zero, as the JSON readers have it.
+    EXPECT_EQ(read(kHeader + "\n" + line("0", "1e-400") + "\n").rows[0].handle->force_N, 0.0);
+}
+
+TEST(RecordingReader, LongCellsAndNamesAreQuotedBounded) {
+    const std::string huge(20 * 1024 * 1024, 'x');
+    const std::string message = error_of(kHeader + "\n" + line("0", huge) + "\n").what();
+    EXPECT_EQ(message, "line 2, column handle_force_N: '" + std::string(80, 'x') +
+                           "…' (20971520 bytes) is not a number");
+    // 20 million digits: a number, far beyond double.
+    const std::string digits =
+        error_of(kHeader + "\n" + line("0", std::string(huge.size(), '7')) + "\n").what();
+    EXPECT_EQ(digits, "line 2, column handle_force_N: '" + std::string(80, '7') +
+                          "…' (20971520 bytes) is out of range (a number's magnitude must be "
+                          "below 1.8e308)");
+    const std::string name(100000, 'c');
+    const std::string header = error_of(kHeader + "," + name + "\n").what();
+    EXPECT_EQ(header, "line 1: unknown column '" + std::string(80, 'c') +
+                          "…' (100000 bytes) (extra columns are allowed only with a name starting "
+                          "with 'x_')");
+    const std::string region =
+        error_of(kHeader + "\n" + line("0", "1", "1", "1", "1", ",,", std::string(500, 'r')) + "\n")
+            .what();
+    EXPECT_EQ(region.rfind("line 2, column region: '" + std::string(80, 'r') +
+                               "…' (500 bytes) is "
+                               "not a colon region",
+                           0),
+              0u)
+        << region;
+}
+
+TEST(RecordingReader, AGapBetweenRowsLongerThanTheBoundIsRefusedWithItsLine) {
+    // 60 s by default: a row 60.000001 s after the one before is refused, 60 s exactly is not.
+    EXPECT_EQ(
+        std::string(error_of(kHeader + "\n" + line("1") + "\n" + line("61.000001") + "\n").what()),
+        "line 3: time_s 61.000001 is 60.000001 s after line 2's 1: a gap between rows "
+        "longer than 60 s is refused (a run would step across all of it; --max-gap-s raises the "
+        "bound)");
+    EXPECT_EQ(read(kHeader + "\n" + line("1") + "\n" + line("61") + "\n").rows.size(), 2u);
+    // A row 10^9 s later, and the bound raised.
+    const std::string far = kHeader + "\n" + line("0") + "\n" + line("999999999") + "\n";
+    EXPECT_EQ(error_of(far).line(), 3u);
+    RecordingReaderOptions wide;
+    wide.max_gap_s = 1e9;
+    EXPECT_EQ(read(far, RecordingReader(wide)).rows.size(), 2u);
+    // The first row may be late: the bound is between rows.
+    EXPECT_EQ(read(kHeader + "\n" + line("5000") + "\n").rows.size(), 1u);
+    // The bound must be positive and finite.
+    for (const double bad : {0.0, -1.0, std::numeric_limits<double>::infinity(),
+                             std::numeric_limits<double>::quiet_NaN()}) {
+        RecordingReaderOptions o;
+        o.max_gap_s = bad;
+        EXPECT_THROW(RecordingReader{o}, RecordingError) << bad;
+    }
 }
 
 /// Rows every 1 ms from 0 to `end_ms`, force/torque except in [a, b) ms, insertion/roll except in [c, d) ms.
