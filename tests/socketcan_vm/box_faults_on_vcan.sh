@@ -8,11 +8,17 @@
 #             tc, by its path: busybox sh would run its own tc applet, which has no pfifo);
 #   unplug    the EM tracker's pseudo-terminal closed (an adapter unplugged: the box reads a
 #             hang-up) and, 0.4 s later, a new one linked at the same path (plugged back in);
-#   stepfwd   the wall clock stepped an hour forward (`date -s`), and 0.5 s later
-#   stepback  an hour back.
+#   stepfwd   the wall clock stepped an hour forward, and 0.5 s later
+#   stepback  an hour back: by the player (SIGUSR1 / SIGUSR2, clock_settime between two frames;
+#             `kill` is a shell builtin), so that no program starts near the step (under TCG a
+#             program's start takes the only CPU for ~0.1 s and would pause the inputs);
+#   stall     the box stopped (SIGSTOP) for 1 s while the player goes on, then continued: the
+#             kernel drops what its socket buffer cannot hold, the box's timer skips ~200
+#             periods; both must be counted, flagged and reported, and the box recovers.
 # Each cause and its end is marked on CLOCK_MONOTONIC in /out/marks.txt (NAME_begin before the
-# command, NAME_done after it; the end as NAME_end_begin / NAME_end_done); the box writes its
-# fault state per change to /out/box_faults.csv.  The host checks them with check_box_faults.py.
+# command, NAME_done after it; the end as NAME_end_begin / NAME_end_done; the steps in the
+# player's report); the box writes its fault state per change to /out/box_faults.csv.  The host
+# checks them with check_box_faults.py.
 set -u
 
 . /scopekin/guest_lib.sh   # wait_receivers, wait_path, mark
@@ -59,10 +65,15 @@ tracker=$!
 wait_path /tmp/ttyEM0
 mark unplug_end_done
 sleep 1.2
-cause stepfwd sh -c 'date -s "@$(( $(date +%s) + 3600 ))" > /dev/null'
+kill -USR1 "$player"    # stepfwd
 sleep 0.5
-cause stepback sh -c 'date -s "@$(( $(date +%s) - 3600 ))" > /dev/null'
-
+kill -USR2 "$player"    # stepback
+sleep 0.5
+mark stall_begin
+kill -STOP "$box"       # the box stalls for 1 s: ~2000 frames for a ~475-frame socket buffer
+sleep 1
+kill -CONT "$box"
+mark stall_end
 sleep 0.5
 mark traffic_end
 kill "$player"   # the log lasts longer than the faults take, however slow the machine

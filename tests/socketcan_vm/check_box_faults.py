@@ -17,6 +17,10 @@ period of any time exactly):
   tracker's exit and in every period of the outage; the line reopened within one retry interval
   (100 ms) and a period of the new tracker's link appearing; the link bit cleared within 3
   periods of the reopen, the stale bit when each source has sent again (1/30 s); on the bus;
+* stall (the box stopped for 1 s): in the first period after it, the overruns counted (at least
+  150) and kBoxFaultPeriodOverrun; the kernel's drops counted and kBoxFaultReceiveDropped within
+  3 periods; the receive backlog flagged within 3 periods and drained; every bit clear again
+  before the traffic ends; the drop count on the bus (BoxCounters can_dropped) equals the box's;
 * stepfwd / stepback (wall clock stepped an hour): nothing in the box changes.  At any speed: the
   times the box recorded for the frames it received never go backwards (a time stamp that
   followed the wall clock did), and every deadline from the first period to the last was either
@@ -36,8 +40,9 @@ import sys
 import canmatrix.formats
 
 from box_logs import (
-    CAN_STATE_BUS_OFF, COUNTER_INDEX, COUNTERS_ID, DRIVER_BUS_OFF, DRIVER_SEND_FAILED,
-    DRIVER_STALE, DRIVER_PERIOD_OVERRUN, FORCE_ID, ENCODER_ID, KINETIC_STALE, STATUS_ID,
+    CAN_STATE_BUS_OFF, COUNTER_INDEX, COUNTERS_ID, DRIVER_BUS_OFF, DRIVER_RECEIVE_BACKLOG,
+    DRIVER_RECEIVE_DROPPED,
+    DRIVER_SEND_FAILED, DRIVER_STALE, DRIVER_PERIOD_OVERRUN, FORCE_ID, ENCODER_ID, KINETIC_STALE, STATUS_ID,
     TRACKER_LINK, TRACKER_STALE, FaultLog, check_flags_account, decode_box_frames,
     longest_lag_periods, read_candump, read_marks)
 
@@ -100,7 +105,10 @@ def main():
                f"{name}: flagged by period {due} (3 periods after the cause), "
                f"got {flagged and flagged['period']}")
         if flagged is not None:
+            # Periods from the command's start; the command itself (a program starting under
+            # TCG) takes command_periods of them.
             result["flagged_after_periods"] = flagged["period"] - log.period_at(begin)
+            result["command_periods"] = log.period_at(done) - log.period_at(begin)
             during = [r for r in log.rows if flagged["monotonic_us"] <= r["monotonic_us"] < end_begin]
             gaps = [r["period"] for r in during if not faulty(r)]
             expect(not gaps, f"{name}: the fault unflagged in periods {gaps[:5]} before it ended")
@@ -109,7 +117,8 @@ def main():
         expect(cleared is not None and cleared["period"] <= due_clear,
                f"{name}: cleared by period {due_clear}{note}, got {cleared and cleared['period']}")
         if cleared is not None:
-            result["cleared_after_periods"] = cleared["period"] - log.period_at(end_done)
+            result["cleared_after_periods"] = cleared["period"] - log.period_at(end_begin)
+            result["end_command_periods"] = log.period_at(end_done) - log.period_at(end_begin)
             # What followed from the fault (stale inputs, the estimator limiting the insertion's
             # jump over the gap, the counter gap) clears too, before the next fault.
             healthy = first_row(cleared["monotonic_us"], all_clear)
@@ -118,9 +127,19 @@ def main():
                    f"{name}: every fault bit clear and state running before the next fault "
                    f"(period {limit}), got {healthy and healthy['period']}")
             if healthy is not None:
-                result["all_clear_after_periods"] = healthy["period"] - log.period_at(end_done)
+                result["all_clear_after_periods"] = healthy["period"] - log.period_at(end_begin)
         measured[name] = result
 
+    # The player's wall-clock steps: [CLOCK_MONOTONIC before, after, seconds].
+    steps = player.get("clock_steps", [])
+    expect(len(steps) == 2 and steps[0][2] == 3600 and steps[1][2] == -3600
+           and player.get("clock_step_failures", 1) == 0,
+           f"the player stepped the wall clock +1 h, then -1 h ({steps}, "
+           f"{player.get('clock_step_failures')} failures)")
+    if len(steps) < 2:
+        steps = [[marks["traffic_end"]] * 2 + [3600], [marks["traffic_end"]] * 2 + [-3600]]
+    for name, (before, after, _) in zip(("stepfwd", "stepback"), steps):
+        marks[f"{name}_begin"], marks[f"{name}_done"] = before, after
     phase_ends = {"netdown": marks["nobufs_begin"], "nobufs": marks["unplug_begin"],
                   "unplug": marks["stepfwd_begin"]}
 
@@ -149,12 +168,40 @@ def main():
         expect(tracker_clear is not None and tracker_clear["period"] <= stale_due,
                f"unplug: TrackerFaults clear once every source has sent again (by period {stale_due}, "
                f"got {tracker_clear and tracker_clear['period']})")
-        measured["unplug"]["reopened_after_periods"] = reopen["period"] - log.period_at(marks["unplug_end_done"])
+        measured["unplug"]["reopened_after_periods"] = reopen["period"] - log.period_at(marks["unplug_end_begin"])
     serial = stats["serial"]
     expect(serial["hangups"] == 1 and serial["reopens"] == 1 and serial["device_open"],
            f"one hang-up, one reopen, the line open at the end ({serial})")
     expect(serial["reopen_attempts"] <= (marks["unplug_end_done"] - marks["unplug_begin"]) // RETRY_US + 2,
            f"reopen attempts bounded by the retry interval ({serial['reopen_attempts']})")
+
+    # --- the box stalled (SIGSTOP for 1 s) ---------------------------------------------------------
+    stall = {}
+    resumed = first_row(marks["stall_begin"], lambda r: r["period_overruns"] - (
+        log.state_at(r["period"] - 1) or r)["period_overruns"] >= 150)
+    expect(resumed is not None, "stall: the first period after it counted >= 150 overruns")
+    if resumed is not None:
+        before = log.state_at(resumed["period"] - 1)
+        stall["overruns_counted"] = resumed["period_overruns"] - before["period_overruns"]
+        expect(resumed["driver_faults"] & DRIVER_PERIOD_OVERRUN, "stall: kBoxFaultPeriodOverrun at once")
+        dropped = first_row(resumed["monotonic_us"], lambda r: r["can_dropped"] > before["can_dropped"])
+        expect(dropped is not None and dropped["period"] <= resumed["period"] + 3
+               and dropped["driver_faults"] & DRIVER_RECEIVE_DROPPED,
+               f"stall: kernel drops counted and kBoxFaultReceiveDropped within 3 periods "
+               f"({dropped and (dropped['period'] - resumed['period'], hex(dropped['driver_faults']))})")
+        if dropped is not None:
+            stall["drops_flagged_after_periods"] = dropped["period"] - resumed["period"]
+            stall["frames_dropped"] = log.rows[-1]["can_dropped"] - before["can_dropped"]
+        backlog = [r["period"] - resumed["period"] for r in log.rows
+                   if r["period"] >= resumed["period"] and r["driver_faults"] & DRIVER_RECEIVE_BACKLOG]
+        expect(backlog and backlog[0] <= 3, f"stall: the backlog flagged within 3 periods ({backlog[:3]})")
+        healthy = first_row(resumed["monotonic_us"] + 1, all_clear)
+        expect(healthy is not None and healthy["monotonic_us"] < marks["traffic_end"],
+               f"stall: every bit clear and state running again before the traffic ends "
+               f"({healthy and healthy['period'] - resumed['period']} periods)")
+        if healthy is not None:
+            stall["all_clear_after_periods"] = healthy["period"] - resumed["period"]
+    measured["stall"] = stall
 
     # --- wall clock stepped -----------------------------------------------------------------------
     for name in ("stepfwd", "stepback"):
@@ -183,8 +230,13 @@ def main():
         stale = [r["period"] for r in window
                  if r["driver_faults"] & DRIVER_STALE or r["tracker_faults"] & TRACKER_STALE]
         expect(not stale, f"{name}: no driver's stale bit around the step (periods {stale[:5]})")
+        # A period or two of lag leaves frames queued past a period: the backlog bit is right
+        # then; without any overrun in the window it would be the step's doing.
+        allowed = DRIVER_PERIOD_OVERRUN | DRIVER_STALE
+        if box_lag > 0:
+            allowed |= DRIVER_RECEIVE_BACKLOG
         other = [(r["period"], hex(r["driver_faults"])) for r in window
-                 if r["driver_faults"] & ~(DRIVER_PERIOD_OVERRUN | DRIVER_STALE)]
+                 if r["driver_faults"] & ~allowed]
         expect(not other, f"{name}: no fault around the step {other[:5]}")
     # The schedule is on the monotonic clock: from the first period to the last, every deadline
     # was either released or counted as an overrun, exactly (a timer on the wall clock would
@@ -239,6 +291,10 @@ def main():
                 if i == COUNTERS_ID and int(v["CounterIndex"]) == COUNTER_INDEX["can_send_failures"]]
     expect(reported and reported[-1] == box["send_failures"],
            f"BoxCounters can_send_failures ends at {box['send_failures']} ({reported[-1:] or None})")
+    reported_drops = [int(v["CounterValue"]) for _, i, v in decoded
+                      if i == COUNTERS_ID and int(v["CounterIndex"]) == COUNTER_INDEX["can_dropped"]]
+    expect(can["dropped"] > 0 and reported_drops and reported_drops[-1] == can["dropped"],
+           f"BoxCounters can_dropped ends at the box's {can['dropped']} ({reported_drops[-1:] or None})")
     measured["send_failed_bit_on_the_bus"] = any(int(v["DriverFaults"]) & DRIVER_SEND_FAILED for v in statuses)
     expect(observer_drops == 0, f"candump (the observer, not the box) lost {observer_drops} frames")
 

@@ -15,6 +15,11 @@
 //       hear, never retried.  Stops at the end of the log or on SIGINT/SIGTERM.  The report
 //       lists the episodes in which frames went out a period (5 ms) or more late ([when the
 //       first was due, the most any was late], µs): when a starved player paused the inputs.
+//       SIGUSR1 / SIGUSR2 step the wall clock (CLOCK_REALTIME) an hour forward / back before the
+//       next frame; the report lists each step as [CLOCK_MONOTONIC µs just before, just after,
+//       seconds].  Stepping here, not with `date -s`, keeps the guest quiet at the step: under
+//       TCG starting any program takes ~0.1 s of the only CPU, which would pause the inputs and
+//       hide what the step itself does to the box.
 //   scopekin-vm-peer tracker --link PATH [--rate-hz N] [--report FILE]
 //       a test-bench EM tracker on a new pseudo-terminal whose slave is reachable at PATH (a
 //       symlink, replaced atomically, like a udev link): valid frames of the four pose sensors
@@ -57,6 +62,7 @@ namespace {
 
 std::atomic<int> stop_signal{0};
 std::atomic<bool> pause_requested{false};
+std::atomic<int> clock_steps_requested{0};  // +1 per SIGUSR1, -1 per SIGUSR2 (play)
 
 extern "C" void on_stop(int signal_number) {
     stop_signal.store(signal_number);
@@ -64,8 +70,11 @@ extern "C" void on_stop(int signal_number) {
 extern "C" void on_pause(int) {
     pause_requested.store(true);
 }
+extern "C" void on_step(int signal_number) {
+    clock_steps_requested.fetch_add(signal_number == SIGUSR1 ? 1 : -1);
+}
 
-void install_signals(bool with_pause) {
+void install_signals(bool with_pause, bool with_steps = false) {
     struct sigaction action {};
     action.sa_handler = on_stop;
     sigemptyset(&action.sa_mask);
@@ -74,6 +83,11 @@ void install_signals(bool with_pause) {
     if (with_pause) {
         action.sa_handler = on_pause;
         sigaction(SIGUSR1, &action, nullptr);
+    }
+    if (with_steps) {
+        action.sa_handler = on_step;
+        sigaction(SIGUSR1, &action, nullptr);
+        sigaction(SIGUSR2, &action, nullptr);
     }
 }
 
@@ -84,12 +98,27 @@ std::uint64_t monotonic_us() {
            static_cast<std::uint64_t>(now.tv_nsec) / 1000U;
 }
 
-/// Sleeps until `deadline_us` on CLOCK_MONOTONIC (returns early on a signal).
+/// Sleeps until `deadline_us` on CLOCK_MONOTONIC (returns early on a stop signal only).
 void sleep_until_us(std::uint64_t deadline_us) {
     timespec deadline{};
     deadline.tv_sec = static_cast<time_t>(deadline_us / 1000000U);
     deadline.tv_nsec = static_cast<long>((deadline_us % 1000000U) * 1000U);
-    (void)clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, nullptr);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &deadline, nullptr) == EINTR &&
+           stop_signal.load() == 0) {
+    }
+}
+
+/// Steps CLOCK_REALTIME by `seconds`; appends [monotonic before, after, seconds] to `steps`.
+bool step_wall_clock(int seconds, std::string& steps) {
+    const std::uint64_t before_us = monotonic_us();
+    timespec now{};
+    clock_gettime(CLOCK_REALTIME, &now);
+    now.tv_sec += seconds;
+    const bool ok = clock_settime(CLOCK_REALTIME, &now) == 0;
+    const std::uint64_t after_us = monotonic_us();
+    steps += (steps.empty() ? "[" : ", [") + std::to_string(before_us) + ", " +
+             std::to_string(after_us) + ", " + std::to_string(seconds) + "]";
+    return ok;
 }
 
 int usage() {
@@ -190,13 +219,15 @@ int play(const std::string& interface, const std::string& log_path,
         std::fprintf(stderr, "scopekin-vm-peer: %s\n", error.c_str());
         return 1;
     }
-    install_signals(false);
+    install_signals(false, true);
 
     std::uint64_t attempted = 0;  // frames whose time came (all of them unless stopped)
     std::uint64_t sent = 0;
     std::uint64_t interface_down = 0;  // CanStatus::bus_off (ENETDOWN)
     std::uint64_t queue_full = 0;      // CanStatus::timeout (ENOBUFS, EAGAIN)
     std::uint64_t other_failures = 0;
+    std::uint64_t clock_step_failures = 0;
+    std::string clock_steps;
     Lateness lateness;
     const std::uint64_t start_us = monotonic_us();
     const std::uint64_t first_stamp_us = records.empty() ? 0U : records.front().timestamp_us;
@@ -208,6 +239,13 @@ int play(const std::string& interface, const std::string& log_path,
             record.timestamp_us > first_stamp_us ? record.timestamp_us - first_stamp_us : 0U;
         const std::uint64_t due_us = start_us + offset_us;
         sleep_until_us(due_us);
+        for (int requested = clock_steps_requested.exchange(0); requested != 0;) {
+            const int direction = requested > 0 ? 1 : -1;
+            if (!step_wall_clock(direction * 3600, clock_steps)) {
+                ++clock_step_failures;
+            }
+            requested -= direction;
+        }
         lateness.sent(due_us, monotonic_us());
         ++attempted;
         switch (bus.send(record.frame, 0U)) {
@@ -217,14 +255,15 @@ int play(const std::string& interface, const std::string& log_path,
             default: ++other_failures; break;
         }
     }
-    std::string json = "{\"frames\": " + std::to_string(records.size()) +
-                       ", \"attempted\": " + std::to_string(attempted) +
-                       ", \"sent\": " + std::to_string(sent) +
-                       ", \"interface_down\": " + std::to_string(interface_down) +
-                       ", \"queue_full\": " + std::to_string(queue_full) +
-                       ", \"other_failures\": " + std::to_string(other_failures) +
-                       ", \"stopped_by_signal\": " + std::to_string(stop_signal.load()) + ", " +
-                       lateness.json() + "}";
+    std::string json =
+        "{\"frames\": " + std::to_string(records.size()) +
+        ", \"attempted\": " + std::to_string(attempted) + ", \"sent\": " + std::to_string(sent) +
+        ", \"interface_down\": " + std::to_string(interface_down) +
+        ", \"queue_full\": " + std::to_string(queue_full) +
+        ", \"other_failures\": " + std::to_string(other_failures) +
+        ", \"stopped_by_signal\": " + std::to_string(stop_signal.load()) + ", \"clock_steps\": [" +
+        clock_steps + "]" + ", \"clock_step_failures\": " + std::to_string(clock_step_failures) +
+        ", " + lateness.json() + "}";
     return write_report(report_path, json) ? 0 : 1;
 }
 

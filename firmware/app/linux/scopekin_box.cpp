@@ -228,14 +228,18 @@ nlohmann::json stats_json(const Box& box, bool serial, double elapsed_s, std::ui
                    {"send_failures", counters.send_failures},
                    {"can_error_frames", box.box.can_health().error_frames()},
                    {"can_bus_off_events", box.box.can_health().bus_off_events()},
-                   {"can_recoveries", box.box.can_health().recoveries()}};
+                   {"can_recoveries", box.box.can_health().recoveries()},
+                   {"receive_filtered", box.box.receive_filtered()},
+                   {"backlog_periods", counters.backlog_periods},
+                   {"late_frames", counters.late_frames}};
     json["handle_sensors"] = {{"force_torque_samples", handle.force_torque_samples},
                               {"insertion_roll_samples", handle.insertion_roll_samples},
                               {"bad_length", handle.bad_length},
                               {"out_of_range", handle.out_of_range},
                               {"sensor_status", handle.sensor_status},
                               {"counter_gaps", handle.counter_gaps},
-                              {"stale_events", handle.stale_events}};
+                              {"stale_events", handle.stale_events},
+                              {"late_samples", handle.late_samples}};
     json["last_output"] = {
         {"step_index", outputs.step_index},
         {"tip_path_mm", static_cast<double>(outputs.tip_path_mm.raw()) / 65536.0},
