@@ -74,7 +74,7 @@ kill -STOP "$box"       # the box stalls for 1 s: ~2000 frames for a ~475-frame 
 sleep 1
 kill -CONT "$box"
 mark stall_end
-sleep 0.5
+sleep 1
 mark traffic_end
 kill "$player"   # the log lasts longer than the faults take, however slow the machine
 wait "$player"

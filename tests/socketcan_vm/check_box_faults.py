@@ -49,6 +49,7 @@ from box_logs import (
 PERIOD_US = 5000
 RETRY_US = 100_000  # scopekin-box --serial-retry-ms default
 TRACKER_CYCLE_US = 33_334  # every source once: 30 Hz
+TRACKER_SETTLE_US = 50_000  # scopekin-vm-peer tracker writes 50 ms after the line is opened
 # The handle sensors are stale after 3 periods (15 ms) without a sample: a player late by 10 ms
 # or more may have let them go stale.
 PLAYER_PAUSE_US = 10_000
@@ -164,8 +165,18 @@ def main():
         expect(link_clear is not None and link_clear["period"] <= reopen["period"] + 3,
                "unplug: link bit cleared within 3 periods of the reopen")
         tracker_clear = first_row(reopen["monotonic_us"], lambda r: r["tracker_faults"] == 0)
-        stale_due = reopen["period"] + TRACKER_CYCLE_US // PERIOD_US + 1 + 3
-        expect(tracker_clear is not None and tracker_clear["period"] <= stale_due,
+        # The new tracker writes 50 ms after the box opened its line, then each source once in a
+        # cycle; where the guest starved it (late by 20 ms or more), only the recovery counts
+        # (every bit clear before the next fault: phase()).
+        stale_due = reopen["period"] + (TRACKER_SETTLE_US + TRACKER_CYCLE_US) // PERIOD_US + 1 + 3
+        with open(os.path.join(out_dir, "tracker2.json")) as f:
+            tracker2 = json.load(f)
+        tracker_starved = [late for due, end, late in tracker2.get("late_episodes", [])
+                           if due <= reopen["monotonic_us"] + 300_000
+                           and end >= reopen["monotonic_us"] and late >= 20_000]
+        measured["unplug"]["tracker_starved_ms"] = max(tracker_starved, default=0) // 1000
+        expect(tracker_clear is not None
+               and (tracker_clear["period"] <= stale_due or tracker_starved),
                f"unplug: TrackerFaults clear once every source has sent again (by period {stale_due}, "
                f"got {tracker_clear and tracker_clear['period']})")
         measured["unplug"]["reopened_after_periods"] = reopen["period"] - log.period_at(marks["unplug_end_begin"])
@@ -216,8 +227,8 @@ def main():
         # did not fall behind (after a stall it reads a backlog of old samples: rightly stale).
         window_start = marks[f"{name}_begin"] - 4 * PERIOD_US
         window_end = marks[f"{name}_done"] + 40 * PERIOD_US
-        player_late = [late for due, late in player.get("late_episodes", [])
-                       if due <= window_end and due + late >= window_start and late >= PLAYER_PAUSE_US]
+        player_late = [late for due, end, late in player.get("late_episodes", [])
+                       if due <= window_end and end >= window_start and late >= PLAYER_PAUSE_US]
         box_lag = longest_lag_periods(FaultLog.from_rows(log, window)) if window else 0
         if player_late or box_lag >= 3:
             result["not_judged"] = {"player_late_ms": max(player_late, default=0) // 1000,
@@ -261,9 +272,10 @@ def main():
     # --- counters agree -------------------------------------------------------------------------
     can = stats["can"]
     # A frame the player's write() accepted just before `ip link set down` can be lost inside the
-    # kernel (its local echo not yet delivered): neither side can count it.  A few at most.
+    # kernel (its local echo still in the receive backlog, flushed with the device): neither side
+    # can count it.  Seen 0 to 4; a bound of a few tens (what can wait in that backlog).
     taken = can["received"] + can["dropped"]
-    expect(player["sent"] - 4 <= taken <= player["sent"],
+    expect(player["sent"] - 40 <= taken <= player["sent"],
            f"box received {can['received']} + dropped {can['dropped']} = {taken} of the "
            f"{player['sent']} frames the player sent")
     measured["lost_at_the_interface_down"] = player["sent"] - taken

@@ -42,7 +42,8 @@ case $scenario in
     "$python3" -c 'import json,sys; s=json.load(open(sys.argv[1])); print("replay of the box record: %d periods, %d output frames compared, %d differ" % (s["periods"], s["compared_frames"], s["differing_frames"])); sys.exit(0 if s["identical"] else 1)' "$work/replay/summary.json"
     ;;
   faults)
-    "$python3" "$here/make_handle_log.py" "$dbc" "$work/handle.log" --duration 30 --gap 0 > "$work/sent.json"
+    "$python3" "$here/make_handle_log.py" "$dbc" "$work/handle.log" --duration 30 --gap 0 \
+      --advance-mm-per-s 15 > "$work/sent.json"
     echo "input: $(cat "$work/sent.json")"
     bash "$here/vm_run.sh" "${common[@]}" --script "$here/box_faults_on_vcan.sh" \
       --bin "$tc:/usr/local/sbin/tc" --file "$work/handle.log:/scopekin/handle.log"

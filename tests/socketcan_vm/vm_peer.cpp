@@ -14,7 +14,8 @@
 //       timeout) is counted and skipped, as a sensor's frame is lost on a bus the box cannot
 //       hear, never retried.  Stops at the end of the log or on SIGINT/SIGTERM.  The report
 //       lists the episodes in which frames went out a period (5 ms) or more late ([when the
-//       first was due, the most any was late], µs): when a starved player paused the inputs.
+//       first was due, when the last went out, the most any was late], µs): when a starved
+//       player paused the inputs.
 //       SIGUSR1 / SIGUSR2 step the wall clock (CLOCK_REALTIME) an hour forward / back before the
 //       next frame; the report lists each step as [CLOCK_MONOTONIC µs just before, just after,
 //       seconds].  Stepping here, not with `date -s`, keeps the guest quiet at the step: under
@@ -25,8 +26,8 @@
 //       symlink, replaced atomically, like a udev link): valid frames of the four pose sensors
 //       and the tip force, round robin, each source at N Hz (default 30), device time =
 //       CLOCK_MONOTONIC µs modulo 2^32 (a restarted tracker continues it).  Frames are written
-//       only while someone has the line open (the master polls POLLHUP otherwise; counted as
-//       unconnected), so `frames` is what a reader could get; frames the slave's queue cannot
+//       only while someone has had the line open for 50 ms (the master polls POLLHUP; the
+//       others are counted as unconnected), so `frames` is what a reader could get; frames the slave's queue cannot
 //       take are counted and dropped.  SIGUSR1 stops streaming (the line stays up)
 //       and writes the report; SIGINT/SIGTERM remove PATH, close the pty (the reader sees a
 //       hang-up: an unplugged adapter), write the report and exit.  The report lists the
@@ -140,7 +141,9 @@ bool write_report(const std::string& path, const std::string& json) {
 }
 
 /// Episodes in which a peer sent a period (5 ms) or more late: when the guest starved it, its
-/// data paused for the box (the checks judge staleness only outside them).
+/// data paused for the box (the checks judge staleness only outside them).  An episode lasts from
+/// the first late frame's due time to the moment the last late frame of a run of them went out;
+/// once the list is full, later episodes are merged into the last one (still covered).
 class Lateness {
 public:
     /// A frame due at `due_us` went out at `now_us`.
@@ -154,18 +157,22 @@ public:
             return;
         }
         if (!in_episode_ && episodes_.size() < kMaxEpisodes) {
-            episodes_.push_back({due_us, late_us});
-            in_episode_ = true;
-        } else if (in_episode_ && late_us > episodes_.back().late_us) {
-            episodes_.back().late_us = late_us;
+            episodes_.push_back({due_us, now_us, late_us});
+        } else {
+            episodes_.back().end_us = now_us;
+            if (late_us > episodes_.back().late_us) {
+                episodes_.back().late_us = late_us;
+            }
         }
+        in_episode_ = true;
     }
-    /// `"late_max_ms": N, "late_episodes": [[due_us, late_us], ...]`
+    /// `"late_max_ms": N, "late_episodes": [[due_us, end_us, late_us], ...]`
     [[nodiscard]] std::string json() const {
         std::string text =
             "\"late_max_ms\": " + std::to_string(max_us_ / 1000U) + ", \"late_episodes\": [";
         for (std::size_t k = 0; k < episodes_.size(); ++k) {
             text += (k == 0U ? "[" : ", [") + std::to_string(episodes_[k].due_us) + ", " +
+                    std::to_string(episodes_[k].end_us) + ", " +
                     std::to_string(episodes_[k].late_us) + "]";
         }
         return text + "]";
@@ -174,6 +181,7 @@ public:
 private:
     struct Episode {
         std::uint64_t due_us;   ///< when the first late frame was due (CLOCK_MONOTONIC)
+        std::uint64_t end_us;   ///< when the last late frame went out
         std::uint64_t late_us;  ///< the most any frame of the episode was late
     };
     static constexpr std::uint64_t kLateUs = 5000;
@@ -323,6 +331,8 @@ int tracker(const std::string& link, std::uint32_t rate_hz, const std::string& r
     const std::uint64_t interval_us = 1000000U / (static_cast<std::uint64_t>(rate_hz) * kSources);
     std::uint64_t due_us = monotonic_us();
     bool paused = false;
+    constexpr std::uint64_t kSettleUs = 50'000;
+    std::uint64_t connected_since_us = 0;  // when the line was found open (0: not open)
     for (std::uint64_t event = 0; stop_signal.load() == 0; ++event) {
         if (pause_requested.load() && !paused) {
             paused = true;
@@ -355,9 +365,20 @@ int tracker(const std::string& link, std::uint32_t rate_hz, const std::string& r
             size = scopekin::protocol::encode_tip_force(force, frame);
         }
         // POLLHUP on the master: nobody has the line open (the box has not opened it yet, or
-        // closed it): the frame goes nowhere and is not counted.
+        // closed it): the frame goes nowhere and is not counted.  For kSettleUs after someone
+        // opened it nothing is written either: the box flushes the line right after opening it,
+        // and a frame written in between would be lost (under load that gap is not short).
         pollfd line{master, POLLOUT, 0};
         if (::poll(&line, 1, 0) >= 0 && (line.revents & POLLHUP) != 0) {
+            ++report.unconnected_frames;
+            connected_since_us = 0;
+            continue;
+        }
+        const std::uint64_t now_us = monotonic_us();
+        if (connected_since_us == 0U) {
+            connected_since_us = now_us;
+        }
+        if (now_us - connected_since_us < kSettleUs) {
             ++report.unconnected_frames;
             continue;
         }
