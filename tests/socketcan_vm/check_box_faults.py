@@ -78,6 +78,15 @@ def main():
         expect(f.read().split() == ["player=0", "scopekin-box=0"], "the player and scopekin-box exit 0")
     check_flags_account(log, expect)
 
+    def player_late_ms(first_us, last_us):
+        """The most the player was late (episodes of PLAYER_PAUSE_US or more) in [first, last]."""
+        return max((late for due, end, late in player.get("late_episodes", [])
+                    if due <= last_us and end >= first_us and late >= PLAYER_PAUSE_US),
+                   default=0) // 1000
+
+    def player_on_time(first_us, last_us):
+        return player_late_ms(first_us, last_us) == 0
+
     def first_row(after_us, predicate):
         for row in log.rows:
             if row["monotonic_us"] >= after_us and predicate(row):
@@ -122,9 +131,14 @@ def main():
             result["end_command_periods"] = log.period_at(end_done) - log.period_at(end_begin)
             # What followed from the fault (stale inputs, the estimator limiting the insertion's
             # jump over the gap, the counter gap) clears too, before the next fault.
+            # Only where the player fed the sensors on time: a starved player leaves them stale.
             healthy = first_row(cleared["monotonic_us"], all_clear)
             limit = log.period_at(phase_ends[name])
-            expect(healthy is not None and healthy["period"] <= limit,
+            on_time = player_on_time(cleared["monotonic_us"], phase_ends[name])
+            if not on_time:
+                result["all_clear_not_judged_player_late_ms"] = player_late_ms(
+                    cleared["monotonic_us"], phase_ends[name])
+            expect(healthy is not None and healthy["period"] <= limit or not on_time,
                    f"{name}: every fault bit clear and state running before the next fault "
                    f"(period {limit}), got {healthy and healthy['period']}")
             if healthy is not None:
@@ -206,8 +220,20 @@ def main():
         backlog = [r["period"] - resumed["period"] for r in log.rows
                    if r["period"] >= resumed["period"] and r["driver_faults"] & DRIVER_RECEIVE_BACKLOG]
         expect(backlog and backlog[0] <= 3, f"stall: the backlog flagged within 3 periods ({backlog[:3]})")
+        # At any speed: the drops stop and the backlog drains (a period without either bit),
+        # and the box runs on.  Every bit clear as well where the player fed it on time.
+        drained = first_row(resumed["monotonic_us"] + 1, lambda r: not r["driver_faults"] & (
+            DRIVER_RECEIVE_DROPPED | DRIVER_RECEIVE_BACKLOG))
+        expect(drained is not None and drained["monotonic_us"] < marks["traffic_end"],
+               "stall: a period without drops or backlog before the traffic ends")
+        if drained is not None:
+            stall["drained_after_periods"] = drained["period"] - resumed["period"]
         healthy = first_row(resumed["monotonic_us"] + 1, all_clear)
-        expect(healthy is not None and healthy["monotonic_us"] < marks["traffic_end"],
+        on_time = player_on_time(resumed["monotonic_us"], marks["traffic_end"])
+        if not on_time:
+            stall["all_clear_not_judged_player_late_ms"] = player_late_ms(
+                resumed["monotonic_us"], marks["traffic_end"])
+        expect(healthy is not None and healthy["monotonic_us"] < marks["traffic_end"] or not on_time,
                f"stall: every bit clear and state running again before the traffic ends "
                f"({healthy and healthy['period'] - resumed['period']} periods)")
         if healthy is not None:
@@ -230,8 +256,14 @@ def main():
         player_late = [late for due, end, late in player.get("late_episodes", [])
                        if due <= window_end and end >= window_start and late >= PLAYER_PAUSE_US]
         box_lag = longest_lag_periods(FaultLog.from_rows(log, window)) if window else 0
-        if player_late or box_lag >= 3:
+        # The tracker's stale bit needs 100 ms without a source: a tracker starved 60 ms or more.
+        with open(os.path.join(out_dir, "tracker2.json")) as f:
+            tracker_late = [late for due, end, late in json.load(f).get("late_episodes", [])
+                            if due <= window_end and end + 100_000 >= window_start
+                            and late >= 60_000]
+        if player_late or tracker_late or box_lag >= 3:
             result["not_judged"] = {"player_late_ms": max(player_late, default=0) // 1000,
+                                    "tracker_late_ms": max(tracker_late, default=0) // 1000,
                                     "box_lag_periods": box_lag}
             continue
         # The drivers' stale bits (no valid sample for 3 periods; the tracker's for 100 ms)
@@ -243,8 +275,11 @@ def main():
         expect(not stale, f"{name}: no driver's stale bit around the step (periods {stale[:5]})")
         # A period or two of lag leaves frames queued past a period: the backlog bit is right
         # then; without any overrun in the window it would be the step's doing.
+        # So is a player late by more than a period (the newest sample older than a period).
         allowed = DRIVER_PERIOD_OVERRUN | DRIVER_STALE
-        if box_lag > 0:
+        player_slow = any(due <= window_end and end >= window_start and late >= PERIOD_US
+                          for due, end, late in player.get("late_episodes", []))
+        if box_lag > 0 or player_slow:
             allowed |= DRIVER_RECEIVE_BACKLOG
         other = [(r["period"], hex(r["driver_faults"])) for r in window
                  if r["driver_faults"] & ~allowed]
