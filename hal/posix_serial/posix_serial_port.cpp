@@ -301,7 +301,7 @@ SerialTransfer PosixSerialPort::read(std::span<std::uint8_t> buffer, std::uint32
             if (hang_up) {
                 return {SerialStatus::closed, 0};  // EOF after a hang-up
             }
-        } else if (errno == EIO) {
+        } else if (errno == EIO || errno == ENXIO || errno == ENODEV) {
             return {SerialStatus::closed, 0};  // pseudo-terminal master closed, device gone
         } else if (errno != EINTR && errno != EAGAIN && errno != EWOULDBLOCK) {
             ++counters_.backend_errors;
@@ -333,7 +333,7 @@ SerialTransfer PosixSerialPort::write(std::span<const std::uint8_t> bytes,
             continue;
         }
         if (count < 0 && errno != EAGAIN && errno != EWOULDBLOCK) {
-            const bool gone = errno == EIO || errno == EPIPE || errno == ENXIO;
+            const bool gone = errno == EIO || errno == EPIPE || errno == ENXIO || errno == ENODEV;
             if (written > 0U) {
                 return {SerialStatus::ok, written};
             }

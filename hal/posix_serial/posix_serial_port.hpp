@@ -4,9 +4,10 @@
 // The device is opened O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC and put in raw mode
 // (cfmakeraw: 8N1, no echo, no line editing, no CR/LF or flow-control translation; CLOCAL |
 // CREAD; VMIN = VTIME = 0).  Timeouts are done with ppoll() on the non-blocking descriptor, at
-// microsecond resolution; EINTR is retried with the remaining time.  A hang-up (EOF, EIO, POLLHUP —
-// what a pseudo-terminal's slave sees when its master closes, or a USB adapter that is unplugged)
-// reads as SerialStatus::closed; reopening is the caller's business.
+// microsecond resolution; EINTR is retried with the remaining time.  A hang-up (EOF, EIO, ENXIO,
+// ENODEV, POLLHUP — what a pseudo-terminal's slave sees when its master closes, or a USB adapter
+// that is unplugged) reads as SerialStatus::closed; reopening is the caller's business
+// (ReopeningSerialPort, reopening_serial_port.hpp, does it).
 //
 // No exceptions: open() reports failure as false plus a message that names the device and the
 // errno text (e.g. "cannot open /dev/ttyUSB0: No such file or directory").  Not firmware (it is

@@ -15,3 +15,19 @@ wait_receivers() {
     usleep 50000
   done
 }
+
+# wait_path PATH: waits until PATH exists (e.g. the EM tracker's serial link).  Gives up after 10 s.
+wait_path() {
+  tries=0
+  while [ ! -e "$1" ]; do
+    tries=$((tries + 1))
+    [ $tries -ge 200 ] && { echo "timeout waiting for $1"; return 1; }
+    usleep 50000
+  done
+}
+
+# mark NAME: appends "NAME <CLOCK_MONOTONIC µs>" to /out/marks.txt (scopekin-vm-peer now): when the
+# script caused or ended a fault, on the clock of the box's periods and --fault-log.
+mark() {
+  echo "$1 $(scopekin-vm-peer now)" >> /out/marks.txt
+}

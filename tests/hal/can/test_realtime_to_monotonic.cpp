@@ -87,3 +87,36 @@ SCOPEKIN_TEST(RealtimeToMonotonic, TimesNeverGoBack) {
     const std::uint64_t third = clock.map(kRealtime0 + 10U, kRealtime0 + 110U, kMonotonic0 + 110U);
     SCOPEKIN_EXPECT_EQ(third, kMonotonic0 + 10U);
 }
+
+// A queue of frames waits in the socket across a step, some stamped before it and some after,
+// and the box has run longer than the step (so the new offset alone gives a plausible time, an
+// hour old): every frame keeps its true receive time, forward and backward.
+SCOPEKIN_TEST(RealtimeToMonotonic, AQueueAcrossAStepKeepsItsTimesAfterHoursOfRunning) {
+    constexpr std::uint64_t kUp = 2U * kHourUs;  // the box has run two hours
+    for (int direction = 0; direction < 2; ++direction) {
+        const bool forward = direction == 0;
+        RealtimeToMonotonic clock{};
+        std::uint64_t offset = kOffset;
+        std::uint64_t t = kUp;
+        for (; t < kUp + 10'000U; t += 500U) {
+            SCOPEKIN_EXPECT_EQ(clock.map(t + offset, t + 1000U + offset, t + 1000U), t);
+        }
+        std::uint64_t arrived[12]{};
+        std::uint64_t stamps[12]{};
+        for (int k = 0; k < 12; ++k, t += 500U) {
+            if (k == 8) {
+                offset = forward ? offset + kHourUs : offset - kHourUs;  // date -s +/-1 h
+            }
+            arrived[k] = t;
+            stamps[k] = t + offset;
+        }
+        for (int k = 0; k < 12; ++k) {
+            SCOPEKIN_EXPECT_EQ(clock.map(stamps[k], t + offset, t), arrived[k]);
+        }
+        // A backlog after a stall of half a second keeps its ages too.
+        const std::uint64_t stalled = t + 500'000U;
+        for (std::uint64_t a = t; a < t + 5000U; a += 1000U) {
+            SCOPEKIN_EXPECT_EQ(clock.map(a + offset, stalled + offset, stalled), a);
+        }
+    }
+}
