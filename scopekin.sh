@@ -21,7 +21,7 @@ TEST_PACKAGES=(
   qemu-user qemu-system-arm
   python3-canmatrix
   clang-14 libclang-rt-14-dev clang-format-14
-  qemu-system-x86 busybox-static can-utils cpio xz-utils
+  qemu-system-x86 busybox-static can-utils cpio xz-utils iproute2
 )
 ALL_PRESETS=(host asan aarch64 cortex-m4 fuzz)
 BUILD_JOBS=2
