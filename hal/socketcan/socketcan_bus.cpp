@@ -9,6 +9,7 @@
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
+#include <linux/sock_diag.h>
 #include <net/if.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -117,6 +118,19 @@ CanFrame from_kernel(const can_frame& kernel) {
     frame.length = kernel.len > CAN_MAX_DLEN ? std::uint8_t{CAN_MAX_DLEN} : kernel.len;
     std::memcpy(frame.data.data(), kernel.data, frame.length);
     return frame;
+}
+
+/// The kernel's count of frames this socket dropped for a full receive buffer (sk_drops, the
+/// count SO_RXQ_OVFL also carries), read now; false if the kernel does not say.
+bool read_kernel_drops(int fd, std::uint32_t& dropped) {
+    std::array<std::uint32_t, SK_MEMINFO_VARS> meminfo{};
+    socklen_t length = sizeof(meminfo);
+    if (getsockopt(fd, SOL_SOCKET, SO_MEMINFO, meminfo.data(), &length) != 0 ||
+        length <= static_cast<socklen_t>(SK_MEMINFO_DROPS * sizeof(std::uint32_t))) {
+        return false;
+    }
+    dropped = meminfo[SK_MEMINFO_DROPS];
+    return true;
 }
 
 }  // namespace
@@ -247,6 +261,13 @@ CanStatus SocketCanBus::send(const CanFrame& frame, std::uint32_t timeout_us) {
 CanStatus SocketCanBus::receive(ReceivedCanFrame& received, std::uint32_t timeout_us) {
     if (socket_ < 0) {
         return CanStatus::failed;
+    }
+    // The drop count is refreshed at every receive, not only from the next frame's SO_RXQ_OVFL
+    // (which arrives behind every frame queued before the drop): the executive, which reads
+    // counters() after its receive loop, sees a drop in the period it happened.
+    std::uint32_t kernel_drops = 0;
+    if (read_kernel_drops(socket_, kernel_drops)) {
+        counters_.dropped = kernel_drops;
     }
     for (int attempt = 0; attempt < 2; ++attempt) {  // bound: one wait, then one more read
         can_frame kernel{};

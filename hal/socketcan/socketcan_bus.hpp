@@ -11,8 +11,10 @@
 //     CLOCK_MONOTONIC, the clock the executive runs on, by the offset between the two clocks
 //     read at receive time (µs accuracy), robust to a wall-clock step while frames wait in the
 //     socket (realtime_to_monotonic.hpp): the executive judges a sample's freshness by its age;
-//   * drops: SO_RXQ_OVFL — the kernel's count of frames dropped because the socket's receive
-//     buffer was full — is CanCounters::dropped;
+//   * drops: the kernel's count of frames dropped because the socket's receive buffer was full
+//     is CanCounters::dropped, read at every receive() (SO_MEMINFO, SK_MEMINFO_DROPS), so a drop
+//     is seen in the period it happened, not only when the frame queued after it is read
+//     (SO_RXQ_OVFL, the same count carried by each frame, arrives behind the whole backlog);
 //   * send: non-blocking write; with a timeout, waits for room (POLLOUT) and tries once more.
 //     ENETDOWN (interface down, e.g. after bus-off without auto-restart) is reported as bus_off;
 //     ENOBUFS (transmit queue full) as timeout.

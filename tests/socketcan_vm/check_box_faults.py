@@ -209,14 +209,19 @@ def main():
         before = log.state_at(resumed["period"] - 1)
         stall["overruns_counted"] = resumed["period_overruns"] - before["period_overruns"]
         expect(resumed["driver_faults"] & DRIVER_PERIOD_OVERRUN, "stall: kBoxFaultPeriodOverrun at once")
-        dropped = first_row(resumed["monotonic_us"], lambda r: r["can_dropped"] > before["can_dropped"])
+        # The drops are read from the kernel each period (SO_MEMINFO): a period released when the
+        # box resumes can see them before the next period counts the overruns, so they are looked
+        # for from the stall on, against the state before it.
+        before_stall = log.state_at(log.period_at(marks["stall_begin"]) - 1) or before
+        dropped = first_row(marks["stall_begin"],
+                            lambda r: r["can_dropped"] > before_stall["can_dropped"])
         expect(dropped is not None and dropped["period"] <= resumed["period"] + 3
                and dropped["driver_faults"] & DRIVER_RECEIVE_DROPPED,
                f"stall: kernel drops counted and kBoxFaultReceiveDropped within 3 periods "
                f"({dropped and (dropped['period'] - resumed['period'], hex(dropped['driver_faults']))})")
         if dropped is not None:
             stall["drops_flagged_after_periods"] = dropped["period"] - resumed["period"]
-            stall["frames_dropped"] = log.rows[-1]["can_dropped"] - before["can_dropped"]
+            stall["frames_dropped"] = log.rows[-1]["can_dropped"] - before_stall["can_dropped"]
         backlog = [r["period"] - resumed["period"] for r in log.rows
                    if r["period"] >= resumed["period"] and r["driver_faults"] & DRIVER_RECEIVE_BACKLOG]
         expect(backlog and backlog[0] <= 3, f"stall: the backlog flagged within 3 periods ({backlog[:3]})")
