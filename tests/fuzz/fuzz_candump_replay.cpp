@@ -45,13 +45,15 @@ void require_at(bool condition, int line) {
 // The line of the failed check in the report (clang 14 has no std::source_location).
 #define require(condition) require_at((condition), __LINE__)
 
+std::array<std::string, 2> paths;  // the two scratch files (the log, the log written back)
+
+/// The scratch file `name` ("a.log", "b.log") of this process (removed after each input).
 const std::string& scratch_file(const char* name) {
     static const std::string directory = [] {
         const char* tmp = std::getenv("TMPDIR");
         return std::string(access("/dev/shm", W_OK) == 0 ? "/dev/shm"
                                                          : (tmp != nullptr ? tmp : "/tmp"));
     }();
-    static std::array<std::string, 2> paths;
     std::string& path = paths[name[0] == 'a' ? 0 : 1];
     if (path.empty()) {
         path = directory + "/scopekin_fuzz_candump_" + std::to_string(getpid()) + "_" + name;
@@ -153,7 +155,24 @@ void check_replay(const host_sim::CandumpLog& log) {
 
 }  // namespace
 
+namespace {
+
+/// Removes the scratch files when an input is done (libFuzzer's exit runs no atexit handler).
+struct ScratchCleanup {
+    ScratchCleanup() = default;
+    ScratchCleanup(const ScratchCleanup&) = delete;
+    ScratchCleanup& operator=(const ScratchCleanup&) = delete;
+    ~ScratchCleanup() {
+        for (const std::string& path : paths) {
+            if (!path.empty()) (void)std::remove(path.c_str());
+        }
+    }
+};
+
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    const ScratchCleanup cleanup;
     const std::string text(reinterpret_cast<const char*>(data), size);
     const std::string& path = scratch_file("a.log");
     write_file(path, text);
