@@ -266,7 +266,8 @@ def em_driver_seeds(rng):
         b"\x45\x00" + em_service(5000) + b"\x4d\x00" + em_service(5000) + b"\x15\x06"
         + b"\x01" + em_pose_operands(1, 3, (5, 5, 5), (16384, 0, 0, 0)) + em_service(5000)
         + b"\x25\x00" + em_service(5000) + take)
-    # 80 poses in one receive(): more than the framer's ring and the sample queue.
+    # 16 poses (512 bytes) in one receive(): more than the framer's 256-byte ring.  Regression:
+    # the driver counted a buffer overflow (and flagged it) though it lost no byte.
     frames = b""
     for k in range(16):
         payload = struct.pack("<IBB3i4h", 100 + k, k % 4, 0, 1000 * k, -1000 * k, 5000, 16384, 0,
