@@ -93,9 +93,13 @@ std::size_t EmTrackerDriver::receive(std::span<const std::uint8_t> bytes,
     std::size_t samples = 0;
     std::size_t offset = 0;
     // Each pass pushes at least one byte: after popping every frame fewer than
-    // kEmTrackerMaxFrameSize bytes stay buffered, so the ring always has room.  bound: bytes.size()
+    // kEmTrackerMaxFrameSize bytes stay buffered, so the ring always has room.  A pass offers no
+    // more than that room: a span larger than the ring loses no byte, so it is no overflow
+    // (the framer counts one for every push it cannot take whole).  bound: bytes.size()
     while (offset < bytes.size()) {
-        const std::size_t taken = framer_.push(bytes.subspan(offset));
+        const std::size_t room = protocol::kEmTrackerFramerCapacity - framer_.buffered();
+        const std::size_t rest = bytes.size() - offset;
+        const std::size_t taken = framer_.push(bytes.subspan(offset, rest < room ? rest : room));
         offset += taken;
         protocol::EmTrackerFrame frame;
         // bound: a pop() consumes >= 17 bytes, so at most kEmTrackerFramerCapacity / 17 frames

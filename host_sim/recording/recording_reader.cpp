@@ -222,6 +222,12 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
         }
         if (known) continue;
         if (name.rfind("x_", 0) == 0 && name.size() > 2) {
+            // As the writer: no quote or carriage return (the file is not quoted CSV).
+            if (name.find_first_of("\"\r") != std::string::npos)
+                throw RecordingError(prefix + "line 1: extra column " + quote_text(name) +
+                                         " holds a quote or a carriage return (not allowed in a "
+                                         "recording's cells)",
+                                     1);
             recording.extra_columns.push_back(name);
             extra_positions.push_back(i);
             continue;
@@ -302,8 +308,16 @@ Recording RecordingReader::read(std::istream& in, const std::string& source) con
 
         std::vector<std::string> extras;
         extras.reserve(extra_positions.size());
-        for (std::size_t p : extra_positions)
-            extras.push_back(cells[p]);
+        for (std::size_t k = 0; k < extra_positions.size(); ++k) {
+            const std::string& cell = cells[extra_positions[k]];
+            // As the writer: no quote or carriage return (the file is not quoted CSV).
+            if (cell.find_first_of("\"\r") != std::string::npos)
+                parser.fail(recording.extra_columns[k],
+                            quote_text(cell) +
+                                " holds a quote or a carriage return (not allowed in a "
+                                "recording's cells)");
+            extras.push_back(cell);
+        }
         recording.rows.push_back(std::move(row));
         recording.row_lines.push_back(line);
         recording.extra_cells.push_back(std::move(extras));

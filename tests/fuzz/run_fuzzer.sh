@@ -3,7 +3,8 @@
 # (the source tree is never written), prints the executions, and appends "<name> <executions>"
 # to the executions file (summed by `fuzz.summary`, recorded in hal/README.md).
 #
-# Usage: run_fuzzer.sh <name> <fuzzer> <work dir> <seconds> <executions file> <seed dir>...
+# Usage: run_fuzzer.sh <name> <fuzzer> <work dir> <seconds> <executions file> <dictionary> <seed dir>...
+#        (<dictionary>: a libFuzzer -dict= file, or "-" for none)
 #        run_fuzzer.sh --summary <executions file>     (per target and total; fails if empty)
 #
 # Exit status: libFuzzer's — non-zero on a crash, a sanitizer report (ASan, UBSan with
@@ -21,12 +22,20 @@ if [[ ${1:-} == --summary ]]; then
   exit 0
 fi
 
-if [[ $# -lt 6 ]]; then
-  echo "usage: $0 <name> <fuzzer> <work dir> <seconds> <executions file> <seed dir>..." >&2
+if [[ $# -lt 7 ]]; then
+  echo "usage: $0 <name> <fuzzer> <work dir> <seconds> <executions file> <dictionary|-> <seed dir>..." >&2
   exit 2
 fi
-name=$1 fuzzer=$2 work=$3 seconds=$4 executions_file=$5
-shift 5
+name=$1 fuzzer=$2 work=$3 seconds=$4 executions_file=$5 dictionary=$6
+shift 6
+dict_option=()
+if [[ $dictionary != - ]]; then
+  if [[ ! -f $dictionary ]]; then
+    echo "fuzz $name: no dictionary $dictionary" >&2
+    exit 2
+  fi
+  dict_option=(-dict="$dictionary")
+fi
 
 rm -rf "$work"
 mkdir -p "$work/corpus"
@@ -35,9 +44,10 @@ for seeds in "$@"; do
     cp -- "$seeds"/* "$work/corpus/" 2>/dev/null || true
   fi
 done
-echo "fuzz $name: $(find "$work/corpus" -type f | wc -l) seed inputs, ${seconds} s"
+echo "fuzz $name: $(find "$work/corpus" -type f | wc -l) seed inputs, ${seconds} s, dictionary ${dictionary}"
 
 "$fuzzer" \
+  "${dict_option[@]}" \
   -max_total_time="$seconds" \
   -timeout=5 \
   -rss_limit_mb=2048 \

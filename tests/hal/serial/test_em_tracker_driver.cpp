@@ -1,6 +1,7 @@
 // EM tracker driver: conversions to mm / N (Q16.16), validation (unknown sensor, range,
 // quaternion norm, timestamps, device status), staleness and recovery, link and serial faults,
-// bytes with no sync, bounded reads, queue overflow, and a randomised hostile stream through a
+// bytes with no sync, bounded reads, queue overflow, a receive() larger than the framer ring (no
+// false overflow), and a randomised hostile stream through a
 // scripted SerialPort.
 // Runs as GoogleTest on x86-64 / aarch64 and with portable_check's runner on Cortex-M4.
 #include <array>
@@ -522,6 +523,21 @@ SCOPEKIN_TEST(EmTrackerDriver, QueueOverflowDropsTheOldest) {
                        1000U + 80U - EmTrackerDriver::kSampleQueueCapacity);
     // The latest value is the newest sample, whatever the queue dropped.
     SCOPEKIN_EXPECT_EQ(g_driver.latest_pose(EmSensor::twenty_cm).device_time_us, 1079U);
+}
+
+SCOPEKIN_TEST(EmTrackerDriver, AReceiveLargerThanTheRingLosesNothingAndFlagsNoOverflow) {
+    reset();
+    // 20 poses, 640 bytes in one receive(): more than the framer's 256-byte ring takes at once.
+    static std::array<std::uint8_t, 20 * 32> stream{};
+    std::size_t size = 0;
+    for (std::uint32_t i = 0; i < 20U; ++i) {
+        size += scopekin::protocol::encode_em_pose(spec_pose(2U, 500U + i),
+                                                   std::span<std::uint8_t>{stream}.subspan(size));
+    }
+    SCOPEKIN_EXPECT_EQ(g_driver.receive(Bytes{stream.data(), size}, 0U), 20U);
+    SCOPEKIN_EXPECT_EQ(g_driver.counters().link.frames_ok, 20U);
+    SCOPEKIN_EXPECT_EQ(g_driver.counters().link.buffer_overflows, 0U);
+    SCOPEKIN_EXPECT_EQ(g_driver.take_fault_flags() & messages::kEmFaultBufferOverflow, 0U);
 }
 
 // --- Randomised hostile stream through a scripted port --------------------------------------------

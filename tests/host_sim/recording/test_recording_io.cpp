@@ -125,6 +125,29 @@ TEST(RecordingReader, UnknownColumnRejectedUnlessItStartsWithX) {
     EXPECT_EQ(r.extra_cells[1], (std::vector<std::string>{"", ""}));
 }
 
+TEST(RecordingReader, AQuoteOrCarriageReturnInAnExtraCellIsRefusedAsTheWriterRefusesIt) {
+    // The writer refuses them (the file is not quoted CSV), so the reader does too: every
+    // recording it accepts can be written back.
+    RecordingError e = error_of(kHeader + ",x_note\n" + line("0") + ",say \"hi\"\n");
+    EXPECT_EQ(e.line(), 2u);
+    EXPECT_EQ(std::string(e.what()),
+              "line 2, column x_note: 'say \"hi\"' holds a quote or a carriage return (not "
+              "allowed in a recording's cells)");
+    e = error_of(kHeader + ",x_note\n" + line("0") + ",a\rb\r\n");
+    EXPECT_EQ(e.line(), 2u);
+    EXPECT_EQ(std::string(e.what()),
+              "line 2, column x_note: 'a\\x0Db' holds a quote or a carriage return (not allowed in "
+              "a recording's cells)");
+    e = error_of(kHeader + ",x_\"q\"\n");
+    EXPECT_EQ(e.line(), 1u);
+    EXPECT_EQ(std::string(e.what()),
+              "line 1: extra column 'x_\"q\"' holds a quote or a carriage return (not allowed in "
+              "a recording's cells)");
+    // A trailing CR is the line end (CRLF), not part of the cell.
+    const Recording r = read(kHeader + ",x_note\r\n" + line("0") + ",ok\r\n");
+    EXPECT_EQ(r.extra_cells[0][0], "ok");
+}
+
 TEST(RecordingReader, DuplicateColumnRejected) {
     const RecordingError e = error_of(kHeader + ",region\n");
     EXPECT_EQ(e.line(), 1u);
