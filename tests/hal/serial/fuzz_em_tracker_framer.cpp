@@ -14,12 +14,8 @@
 //   * push() takes min(offered, free room) bytes, never 0 when there is room;
 //   * the output (frames, in order) and every counter but buffer_overflows do not depend on how
 //     the stream was split.
-// Not wired into CMake (a clang fuzz preset will be).  Build and run by hand from the repository
-// root:
-//   clang++-14 -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -I firmware -I . \
-//     tests/hal/serial/fuzz_em_tracker_framer.cpp firmware/protocol/em_tracker/em_tracker_frame.cpp
-//   ./a.out -max_total_time=20 tests/hal/serial/fuzz_corpus/em_tracker_framer
-// (copy the corpus directory first if new inputs should not land in the repository).
+// Built as scopekin_fuzz_em_tracker_framer and run by CTest as fuzz.em_tracker_framer in the
+// `fuzz` preset (tests/fuzz/CMakeLists.txt), on a copy of tests/hal/serial/fuzz_corpus/.
 #include <array>
 #include <cstddef>
 #include <cstdint>
