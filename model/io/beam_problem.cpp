@@ -151,8 +151,13 @@ BeamProblem read_beam_problem(const nlohmann::json& document, const std::string&
         for (std::size_t i = 0; i < p.beam.node_count(); ++i)
             p.output_nodes.push_back(i);
     }
-    p.loads.assemble(p.beam);               // validates load node indices and values
-    validate_supports(p.beam, p.supports);  // validates support node indices and targets
+    try {
+        p.loads.assemble(p.beam);               // validates load node indices and values
+        validate_supports(p.beam, p.supports);  // validates support node indices and targets
+    } catch (const ModelError& error) {
+        // Those checks name the field only (they also guard problems built in code): the file too.
+        throw ModelError(source + ": " + error.what());
+    }
     return p;
 }
 

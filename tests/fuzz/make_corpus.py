@@ -515,6 +515,12 @@ SCENARIO_EXTRA = {
     "number_1e400": b'{"beam": {}, "gravity_mm_per_s2": 1e400}',
     "duplicate_key": b'{"description": "a", "description": "b"}',
     "empty_object": b"{}",
+    # Found by the fuzzer: a beam problem's load on a node past the beam's end was refused
+    # without the file's name (BeamProblem.NodeChecksNameTheFile).
+    "regression_load_node_past_the_end": (
+        b'{"beam": {"straight": {"length_mm": 1000, "elements": 20}, "section": {"EA_N": 1e8, '
+        b'"EI_Nmm2": 1e6, "GJ_Nmm2": 1e6, "kappa_GA_N": 1e8}}, '
+        b'"loads": [{"node": 21, "force_N": [0, -10, 0]}], "supports": [{"node": 0}]}'),
 }
 
 

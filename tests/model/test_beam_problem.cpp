@@ -52,6 +52,19 @@ TEST(BeamProblem, UnknownKeyIsNamedWithItsPath) {
     expect_error(doc, "problem.json: colour: unknown key");
 }
 
+TEST(BeamProblem, NodeChecksNameTheFile) {
+    // Found by fuzz.scenario: the node checks run after reading and named the field only.
+    nlohmann::json doc = valid_problem();
+    doc["loads"][0]["node"] = 21;
+    expect_error(doc, "problem.json: loads[0].node: 21 is out of range (beam has 21 nodes)");
+    doc = valid_problem();
+    doc["supports"][0]["node"] = 21;
+    expect_error(doc, "problem.json: supports[0].node: 21 is out of range");
+    doc = valid_problem();
+    doc["supports"].push_back({{"node", 0}});
+    expect_error(doc, "problem.json: supports[1].node: node 0 is supported twice");
+}
+
 TEST(BeamProblem, BadValuesAreNamed) {
     nlohmann::json doc = valid_problem();
     doc["beam"]["section"]["EI_Nmm2"] = -5;
