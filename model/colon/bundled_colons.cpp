@@ -45,7 +45,7 @@ ColonTube default_colon(double scope_radius_mm) {
 ColonTube straight_tube(double length_mm, double inner_radius_mm, ColonRegion region,
                         double scope_radius_mm) {
     require_positive(length_mm, "straight_tube length_mm");
-    const auto pieces = static_cast<std::size_t>(std::ceil(length_mm / 10.0));
+    const std::size_t pieces = centerline_pieces(length_mm, 10.0, "straight_tube length_mm");
     std::vector<ColonPoint> points;
     for (std::size_t i = 0; i <= pieces; ++i)
         points.push_back({{length_mm * static_cast<double>(i) / static_cast<double>(pieces), 0, 0},
@@ -61,14 +61,14 @@ ColonTube single_bend(double lead_mm, double bend_radius_mm, double bend_angle_r
     require_positive(bend_angle_rad, "single_bend bend_angle_rad");
     if (bend_angle_rad > M_PI) throw ModelError("single_bend bend_angle_rad: must be <= pi");
     std::vector<ColonPoint> points;
-    const auto lead_pieces = static_cast<std::size_t>(std::ceil(lead_mm / 10.0));
+    const std::size_t lead_pieces = centerline_pieces(lead_mm, 10.0, "single_bend lead_mm");
     for (std::size_t i = 0; i < lead_pieces; ++i)
         points.push_back(
             {{lead_mm * static_cast<double>(i) / static_cast<double>(lead_pieces), 0, 0},
              inner_radius_mm,
              region});
-    const auto bend_pieces =
-        static_cast<std::size_t>(std::ceil(bend_radius_mm * bend_angle_rad / 10.0));
+    const std::size_t bend_pieces =
+        centerline_pieces(bend_radius_mm * bend_angle_rad, 10.0, "single_bend bend_radius_mm");
     const Eigen::Vector3d centre(lead_mm, bend_radius_mm, 0.0);
     for (std::size_t i = 0; i < bend_pieces; ++i) {
         const double a = bend_angle_rad * static_cast<double>(i) / static_cast<double>(bend_pieces);

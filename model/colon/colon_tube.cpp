@@ -106,6 +106,16 @@ std::pair<double, double> ColonTube::narrowest_radius_mm() const {
     return {points_[best].inner_radius_mm, arc_length_[best]};
 }
 
+std::size_t centerline_pieces(double length_mm, double spacing_mm, const std::string& field) {
+    const double pieces = std::ceil(length_mm / spacing_mm);
+    // Compared as doubles: a cast of a value beyond size_t's range is undefined.
+    if (!std::isfinite(pieces) || pieces > static_cast<double>(kMaxCenterlinePoints))
+        throw ModelError(field + ": " + std::to_string(length_mm) + " mm needs more than " +
+                         std::to_string(kMaxCenterlinePoints) + " centerline points of " +
+                         std::to_string(spacing_mm) + " mm");
+    return pieces < 1.0 ? 1U : static_cast<std::size_t>(pieces);
+}
+
 std::vector<ColonPoint> sample_centerline(const std::vector<ColonPoint>& w, double spacing_mm) {
     require_positive(spacing_mm, "centerline spacing_mm");
     if (w.size() < 2) throw ModelError("centerline: needs at least 2 waypoints");
@@ -128,7 +138,11 @@ std::vector<ColonPoint> sample_centerline(const std::vector<ColonPoint>& w, doub
                              static_cast<double>(k - 1) / kFine))
                     .norm();
         const double span = s[kFine];
-        const int pieces = std::max(1, static_cast<int>(std::ceil(span / spacing_mm)));
+        const int pieces = static_cast<int>(
+            centerline_pieces(span, spacing_mm, "centerline span " + std::to_string(i)));
+        if (out.size() + static_cast<std::size_t>(pieces) > kMaxCenterlinePoints)
+            throw ModelError("centerline: more than " + std::to_string(kMaxCenterlinePoints) +
+                             " points (spacing_mm " + std::to_string(spacing_mm) + ")");
         std::size_t k = 0;
         for (int piece = 0; piece < pieces; ++piece) {
             const double target = span * piece / pieces;

@@ -5,6 +5,7 @@
 // self-intersection (the lumens of two parts of the colon that are far apart along it may touch
 // but never overlap).
 #include <Eigen/Dense>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,14 @@ private:
     std::vector<ColonPoint> points_;
     std::vector<double> arc_length_;
 };
+
+/// At most this many centerline points in one colon (1 km at 10 mm): a length that would need more
+/// is an input error, refused before anything is allocated.
+inline constexpr std::size_t kMaxCenterlinePoints = 100000;
+
+/// The number of pieces of at most `spacing_mm` that cover `length_mm` (at least 1), refused with
+/// `field` named (ModelError) when it would pass kMaxCenterlinePoints or is not finite.
+std::size_t centerline_pieces(double length_mm, double spacing_mm, const std::string& field);
 
 /// A smooth centerline through waypoints (centripetal-free uniform Catmull-Rom spline), sampled
 /// so that consecutive points are at most `spacing_mm` apart. Each waypoint carries the region

@@ -521,6 +521,12 @@ SCENARIO_EXTRA = {
         b'{"beam": {"straight": {"length_mm": 1000, "elements": 20}, "section": {"EA_N": 1e8, '
         b'"EI_Nmm2": 1e6, "GJ_Nmm2": 1e6, "kappa_GA_N": 1e8}}, '
         b'"loads": [{"node": 21, "force_N": [0, -10, 0]}], "supports": [{"node": 0}]}'),
+    # Found by the fuzzer: a bend radius beyond size_t's range of 10 mm pieces (undefined
+    # behaviour, then billions of points; ScenarioReader.ColonsTooLongToSampleAreRefused...).
+    "regression_bend_radius_4e68": (
+        b'{"colon": {"bundled": "single_bend", "lead_mm": 150, "bend_radius_mm": 4e68, '
+        b'"bend_angle_deg": 115, "inner_radius_mm": 14, "region": "sigmoid"}, '
+        b'"scope": {"model": "cf_q160l", "elements": 60}, "initial_insertion_mm": 50}'),
 }
 
 

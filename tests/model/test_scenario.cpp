@@ -226,6 +226,27 @@ TEST(ScenarioReader, ProcedureGoingBackwardsOrOverlappingIsRejected) {
     expect_error(doc, {"procedure[0].end_s", "1 h"});
 }
 
+TEST(ScenarioReader, ColonsTooLongToSampleAreRefusedBeforeAllocating) {
+    // Found by fuzz.scenario: a bend radius of 4e68 mm overflowed the piece count (undefined
+    // behaviour, then a vector of billions of points).  At most 100,000 centerline points.
+    nlohmann::json doc = base();
+    doc["colon"] = {{"bundled", "single_bend"},
+                    {"lead_mm", 150},
+                    {"bend_radius_mm", 4e68},
+                    {"bend_angle_deg", 115},
+                    {"inner_radius_mm", 15}};
+    expect_error(doc, {"s.json: colon", "single_bend bend_radius_mm", "100000 centerline points"});
+    doc["colon"]["bend_radius_mm"] = 40;
+    doc["colon"]["lead_mm"] = 1e7;
+    expect_error(doc, {"s.json: colon", "single_bend lead_mm", "100000 centerline points"});
+    doc["colon"] = {{"bundled", "straight_tube"}, {"length_mm", 1e300}, {"inner_radius_mm", 15}};
+    expect_error(doc, {"s.json: colon", "straight_tube length_mm", "100000 centerline points"});
+    doc["colon"] = nlohmann::json::parse(R"({"spacing_mm": 1e-6, "waypoints": [
+      {"position_mm": [0, 0, 0], "inner_radius_mm": 15, "region": "rectum"},
+      {"position_mm": [200, 0, 0], "inner_radius_mm": 15, "region": "rectum"}]})");
+    expect_error(doc, {"s.json: colon", "100000 centerline points"});
+}
+
 TEST(ScenarioReader, ImpossibleColonsAreRejected) {
     nlohmann::json doc = base();
     // A loop that comes back onto its own start: the lumens overlap.
