@@ -27,6 +27,7 @@
 #include <fstream>
 #include <string>
 
+#include "fuzz_support.hpp"
 #include "host_sim/replay/candump_replay.hpp"
 #include "protocol/can/scopekin_messages.hpp"
 
@@ -35,15 +36,6 @@ namespace {
 namespace host_sim = scopekin::host_sim;
 namespace hal = scopekin::hal;
 namespace protocol = scopekin::protocol;
-
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
 
 std::array<std::string, 2> paths;  // the two scratch files (the log, the log written back)
 

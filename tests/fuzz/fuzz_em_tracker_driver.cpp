@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "drivers/em_tracker_driver.hpp"
+#include "fuzz_support.hpp"
 #include "hal/serial_port.hpp"
 #include "protocol/em_tracker/em_tracker_frame.hpp"
 
@@ -52,37 +53,7 @@ using scopekin::drivers::EmTrackerDriver;
 using scopekin::drivers::EmTrackerDriverCounters;
 using namespace scopekin::messages;
 
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
-
-class Script {
-public:
-    Script(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
-    [[nodiscard]] bool done() const { return offset_ >= size_; }
-    std::uint8_t byte() { return offset_ < size_ ? data_[offset_++] : std::uint8_t{0}; }
-    std::uint16_t u16() {
-        const auto low = byte();
-        return static_cast<std::uint16_t>(low | (byte() << 8U));
-    }
-    /// Up to n bytes of the input (fewer at its end).
-    std::span<const std::uint8_t> take(std::size_t n) {
-        const std::size_t count = std::min(n, size_ - std::min(offset_, size_));
-        const std::span<const std::uint8_t> bytes{data_ + offset_, count};
-        offset_ += count;
-        return bytes;
-    }
-
-private:
-    const std::uint8_t* data_;
-    std::size_t size_;
-    std::size_t offset_ = 0;
-};
+using scopekin::fuzz::Script;
 
 /// A serial port whose reads the script decides.
 class ScriptedPort final : public scopekin::hal::SerialPort {

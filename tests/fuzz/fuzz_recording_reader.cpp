@@ -21,6 +21,7 @@
 #include <sstream>
 #include <string>
 
+#include "fuzz_support.hpp"
 #include "host_sim/recording/recording_format.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/recording/wire_values.hpp"
@@ -28,15 +29,6 @@
 namespace {
 
 using namespace scopekin::recording;
-
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
 
 std::string write_rows(const Recording& recording) {
     std::ostringstream out;

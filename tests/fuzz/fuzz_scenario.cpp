@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <string>
 
+#include "fuzz_support.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
 #include "model/scenario/scenario.hpp"
@@ -23,15 +24,6 @@ namespace {
 
 namespace model = scopekin::model;
 using nlohmann::json;
-
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
 
 void require_model_error_text(const model::ModelError& error) {
     const std::string message = error.what();

@@ -49,6 +49,7 @@
 #include <span>
 
 #include "executive/sensor_box.hpp"
+#include "fuzz_support.hpp"
 #include "hal/loopback/loopback_can.hpp"
 #include "hal/loopback/loopback_serial.hpp"
 #include "hal/loopback/simulated_clock.hpp"
@@ -65,34 +66,7 @@ using scopekin::executive::BoxCounters;
 using scopekin::executive::SensorBox;
 using namespace scopekin::messages;
 
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
-
-class Script {
-public:
-    Script(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
-    [[nodiscard]] bool done() const { return offset_ >= size_; }
-    std::uint8_t byte() { return offset_ < size_ ? data_[offset_++] : std::uint8_t{0}; }
-    std::uint16_t u16() {
-        const auto low = byte();
-        return static_cast<std::uint16_t>(low | (byte() << 8U));
-    }
-    std::uint32_t u32() {
-        const std::uint32_t low = u16();
-        return low | (static_cast<std::uint32_t>(u16()) << 16U);
-    }
-
-private:
-    const std::uint8_t* data_;
-    std::size_t size_;
-    std::size_t offset_ = 0;
-};
+using scopekin::fuzz::Script;
 
 constexpr std::uint16_t kAllBoxFaults = (1U << 15U) - 1U;
 constexpr std::uint32_t kAllKineticFaults = (1U << 14U) - 1U;

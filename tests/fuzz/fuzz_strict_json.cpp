@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_support.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
 
@@ -24,15 +25,6 @@ namespace {
 
 namespace io = scopekin::model::io;
 using nlohmann::json;
-
-void require_at(bool condition, int line) {
-    if (!condition) {
-        std::fprintf(stderr, "invariant violated: %s:%d\n", __FILE__, line);
-        __builtin_trap();
-    }
-}
-// The line of the failed check in the report (clang 14 has no std::source_location).
-#define require(condition) require_at((condition), __LINE__)
 
 /// Nesting depth of arrays and objects (a scalar: 0), without recursion.
 std::size_t depth_of(const json& document) {
