@@ -188,10 +188,13 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         const auto& f = model.force_N[j];
         out.arc_from_tip_mm = spacing * Q16_16::from_int(static_cast<int>(j));
         out.path_position_mm = model.reference_path_mm[j] + model.elastic_mm[j][1];
-        out.normal_force_N = f[0];
+        // A passive station's resultant can pull (f_n < 0: its stretch presses on opposite
+        // walls, reduced_kinetics.hpp "Passive stations"); the published normal force is the
+        // push on the station's own wall, >= 0, and the magnitude is the whole resultant's.
+        out.normal_force_N = f[0] < Q16_16{} ? Q16_16{} : f[0];
         out.tangential_force_N = fixed_point::hypot_sat(f[1], f[2]);
         out.state = station_state(model.contact_state[j]);
-        const Q16_16 magnitude = fixed_point::hypot_sat(out.normal_force_N, out.tangential_force_N);
+        const Q16_16 magnitude = fixed_point::hypot_sat(f[0], out.tangential_force_N);
         if (magnitude > outputs.max_contact_force_N) {
             outputs.max_contact_force_N = magnitude;
             outputs.max_contact_station = static_cast<std::uint8_t>(j);

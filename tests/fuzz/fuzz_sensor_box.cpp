@@ -71,9 +71,6 @@ using scopekin::fuzz::Script;
 constexpr std::uint16_t kAllBoxFaults = (1U << 15U) - 1U;
 constexpr std::uint32_t kAllKineticFaults = (1U << 14U) - 1U;
 constexpr std::size_t kMaxPeriods = 48;
-/// Station forces >= 0 (kinetics_io.hpp): off while the estimator's negative normal force is an
-/// open defect (see check_period).
-constexpr bool kCheckStationForceSign = false;
 
 /// The box and its world: the loopback wire and serial line on a simulated clock.
 struct Bench {
@@ -225,9 +222,7 @@ void check_period(Bench& bench, Tracking& tracking, bool overran, bool bus_off) 
         // estimator can report a negative normal force (-1.12 N at a slipping station 400 mm
         // from the tip, in the first period at 530.5 mm insertion, no fault flag); until the
         // estimator is fixed this check stays off so that CI runs do not fail on it.
-        if (kCheckStationForceSign) {
-            require(station.normal_force_N.raw() >= 0 && station.tangential_force_N.raw() >= 0);
-        }
+        require(station.normal_force_N.raw() >= 0 && station.tangential_force_N.raw() >= 0);
     }
 
     // The frames it sent.

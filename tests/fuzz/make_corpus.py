@@ -21,7 +21,8 @@ handle_sensors     scripts of fuzz_handle_sensors.cpp: both sensors at 1 kHz, st
                    flags, foreign ids), a receive clock behind the period clock.
 sensor_box         scripts of fuzz_sensor_box.cpp: an advance with EM and tip force samples,
                    silence, no serial port, a foreign-frame flood and a burst beyond the queue, a
-                   stall, error frames and bus-off, overruns and clock jumps, serial noise.
+                   stall, error frames and bus-off, overruns and clock jumps, serial noise, and
+                   the regression input of what the fuzzer found.
 recording_reader   recording CSV files (RECORDING.md): every group, CRLF with a byte-order mark,
                    reordered and extra columns, the wire's limits, and refused ones (time going
                    back, a 61 s gap, 1e309, an unknown region, half a group, a 300-digit cell).
@@ -410,6 +411,11 @@ def sensor_box_seeds(messages, rng):
     raw += bytes([0, 0x80]) + struct.pack("<H", 0x181) + bytes([8]) + bytes(8)
     seeds["raw_frames"] = raw + PERIOD * 2
     seeds["empty"] = b""
+    # Found by the fuzzer: a box starting at 530.5 mm with 1 N published a normal force < 0.
+    seeds["regression_negative_normal_force"] = bytes.fromhex(
+        "01110000010000000000000019008c120200000000000088137cff0cff0000041100041100000100000000"
+        "000000190000c800000000000000000000000100000020000000190000c800000000000000000100000000"
+        "00000019008c88137cff0c0004")
     return seeds
 
 

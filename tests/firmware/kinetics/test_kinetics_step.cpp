@@ -192,3 +192,27 @@ SCOPEKIN_TEST(KineticsStep, DepthJitterBelowTheHysteresisDoesNotReverseTheDirect
     kin::step(in, g_state, g_out);
     SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
 }
+
+SCOPEKIN_TEST(KineticsStep, PublishedNormalForcesNeverPullOnTheWall) {
+    // Found by fuzz.sensor_box: a box starting at 530.5 mm with 1 N on the handle published a
+    // station normal force of -1.12 N. That station is passive (its training stretch presses on
+    // opposite walls, so the resultant pulls); a wall can only push (kinetics_io.hpp: >= 0).
+    kin::init(kin::default_config(), g_state);
+    kin::Inputs in = sample(530);
+    in.insertion_mm = Q16_16::from_ratio(5305, 10);
+    in.handle_force_N = Q16_16::from_int(1);
+    kin::step(in, g_state, g_out);
+    bool resultant_pulls = false;
+    for (std::size_t j = 0; j < g_out.active_stations; ++j) {
+        SCOPEKIN_EXPECT_TRUE(g_out.stations[j].normal_force_N >= Q16_16{});
+        resultant_pulls = resultant_pulls || g_state.model.force_N[j][0] < Q16_16{};
+    }
+    SCOPEKIN_EXPECT_TRUE(resultant_pulls);  // the case above still exercises a pulling station
+    // A first period at every depth of the training, 5 mm apart.
+    for (int depth = 20; depth <= 1700; depth += 5) {
+        kin::init(kin::default_config(), g_state);
+        kin::step(sample(depth), g_state, g_out);
+        for (std::size_t j = 0; j < g_out.active_stations; ++j)
+            SCOPEKIN_EXPECT_TRUE(g_out.stations[j].normal_force_N >= Q16_16{});
+    }
+}
