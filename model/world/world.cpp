@@ -111,6 +111,8 @@ World::World(const ScopeSpec& scope, const ColonTube& colon,
     scope_ = ScopeBeam(std::move(nodes), std::move(sections));
     velocity_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(scope_.dof_count()));
     warm_start_.assign(scope_.node_count(), {0.0, 0.0, 0.0});
+    wall_deflection_mm_.assign(scope_.node_count(), Eigen::Vector3d::Zero());
+    contact_force_N_.assign(scope_.node_count(), Eigen::Vector3d::Zero());
     problem_ = std::make_unique<Problem>();
     forces_ = std::make_unique<Forces>();
 
@@ -167,6 +169,8 @@ World::State World::state() const {
     s.previous_colon_forces = previous_colon_forces_;
     s.contacts = contact_reports_;
     s.warm_start = warm_start_;
+    s.wall_deflection_mm = wall_deflection_mm_;
+    s.contact_force_N = contact_force_N_;
     s.tracking = tracking_;
     return s;
 }
@@ -174,6 +178,8 @@ World::State World::state() const {
 void World::restore(const State& saved) {
     if (saved.scope.positions.size() != scope_.node_count() ||
         saved.warm_start.size() != scope_.node_count() ||
+        saved.wall_deflection_mm.size() != scope_.node_count() ||
+        saved.contact_force_N.size() != scope_.node_count() ||
         saved.velocity.size() != static_cast<Eigen::Index>(scope_.dof_count()))
         throw ModelError("restore: the saved state is of a scope with " +
                          std::to_string(saved.scope.positions.size()) +
@@ -198,6 +204,8 @@ void World::restore(const State& saved) {
     previous_colon_forces_ = saved.previous_colon_forces;
     contact_reports_ = saved.contacts;
     warm_start_ = saved.warm_start;
+    wall_deflection_mm_ = saved.wall_deflection_mm;
+    contact_force_N_ = saved.contact_force_N;
     tracking_ = saved.tracking;
 }
 
@@ -246,6 +254,11 @@ WorldStepReport World::step(const HandleCommand& command) {
     }
     return report;
 }
+
+namespace {
+/// Largest displacement of a scope node in one step that World::attempt accepts [mm].
+constexpr double kMaxNodeStep_mm = 10.0;
+}  // namespace
 
 WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tangent) {
     WorldStepReport report;
@@ -331,7 +344,13 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         while (first_element + 1 < nodes && held[first_element + 1])
             ++first_element;
 
-    // 3. Free motion: Newton on (M/h^2 + C/h + K_T) d = r, M and C frozen at the step's start.
+    // 3. Free motion: Newton on (M/h^2 + C/h + K_T) d = r, M and C frozen at the step's start,
+    //    under the last step's contact forces: the contact problem then solves for their change
+    //    (small from one step to the next) and its linearisation about the free configuration
+    //    holds. Free of the contact forces, a scope pressed into a bend would spring straight
+    //    by millimetres at large steps, and the handle force would depend on the step size.
+    for (std::size_t k = 0; k < nodes; ++k)
+        if (!held[k]) f_ext.segment<3>(static_cast<Eigen::Index>(6 * k)) += contact_force_N_[k];
     Eigen::VectorXd increment_total = Eigen::VectorXd::Zero(dofs);
     Eigen::VectorXd last_residual, last_increment;
     Eigen::VectorXd momentum;
@@ -386,9 +405,19 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
 
     // 4. Contacts at the free configuration, against the colon at rest (it is massless and
     //    elastic: without contact forces it returns there).
-    std::vector<ContactCandidate> candidates = detect_contacts(
-        scope_, colon_rest_mm_, tube_, {scope_radius_mm_, settings_.contact.activation_distance_mm},
-        held, &tracking_);
+    //    A node that carried a contact force stays a candidate whatever its gap: that force
+    //    pushed it off the wall in the free motion, and releasing it unchecked would let it
+    //    spring through the wall.
+    std::vector<ContactCandidate> candidates =
+        detect_contacts(scope_, colon_rest_mm_, tube_,
+                        {scope_radius_mm_, std::numeric_limits<double>::max()}, held, &tracking_);
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [&](const ContactCandidate& c) {
+                                        return c.gap_mm >
+                                                   settings_.contact.activation_distance_mm &&
+                                               contact_force_N_[c.scope_node].isZero(0.0);
+                                    }),
+                     candidates.end());
     if (candidates.size() > kMaxWorldContacts) {
         std::sort(candidates.begin(), candidates.end(),
                   [](const ContactCandidate& a, const ContactCandidate& b) {
@@ -407,6 +436,35 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
     problem.contact_count = nc;
     std::vector<double> mu(nc, 0.0);
     Eigen::VectorXd correction = Eigen::VectorXd::Zero(dofs);
+    // The free motion carried last step's contact forces; where a contact is gone, its force is
+    // released now (its nodes spring free before the contacts that remain are solved).
+    std::vector<bool> in_contact(nodes, false);
+    for (const ContactCandidate& c : candidates)
+        in_contact[c.scope_node] = true;
+    Eigen::VectorXd released = Eigen::VectorXd::Zero(dofs);
+    bool any_released = false;
+    for (std::size_t k = 0; k < nodes; ++k)
+        if (!in_contact[k] && !held[k] && !contact_force_N_[k].isZero(0.0)) {
+            released.segment<3>(static_cast<Eigen::Index>(6 * k)) = -contact_force_N_[k];
+            any_released = true;
+        }
+    if (any_released) {
+        const Eigen::VectorXd release_increment = factorization_.solve(released);
+        if (!release_increment.allFinite()) {
+            report.failure = "contact: the release of lost contacts is not finite";
+            return report;
+        }
+        scope_.apply_increment(release_increment);
+        increment_total += release_increment;
+        last_increment += release_increment;
+        for (ContactCandidate& c : candidates)
+            c.gap_mm += c.frame.col(0).dot(
+                release_increment.segment<3>(static_cast<Eigen::Index>(6 * c.scope_node)));
+    }
+    // Last step's force at each contact, in its frame now (zero for a new contact).
+    std::vector<Eigen::Vector3d> carried(nc);
+    for (std::size_t a = 0; a < nc; ++a)
+        carried[a] = candidates[a].frame.transpose() * contact_force_N_[candidates[a].scope_node];
     if (nc > 0) {
         std::vector<std::size_t> contact_nodes(nc);
         for (std::size_t a = 0; a < nc; ++a)
@@ -433,15 +491,21 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             }
         for (std::size_t a = 0; a < nc; ++a) {
             const ContactCandidate& ca = candidates[a];
+            // The scope's response to the carried forces, already in its free motion.
+            Eigen::Vector3d carried_response = Eigen::Vector3d::Zero();
             for (std::size_t b = 0; b < nc; ++b) {
                 const ContactCandidate& cb = candidates[b];
-                const Eigen::Matrix3d w =
+                const Eigen::Matrix3d w_scope =
                     ca.frame.transpose() *
-                    (scope_blocks.block<3, 3>(static_cast<Eigen::Index>(3 * a),
-                                              static_cast<Eigen::Index>(3 * b)) +
-                     compliance_->point_block(ca.colon_segment, ca.colon_weight, cb.colon_segment,
-                                              cb.colon_weight)) *
+                    scope_blocks.block<3, 3>(static_cast<Eigen::Index>(3 * a),
+                                             static_cast<Eigen::Index>(3 * b)) *
                     cb.frame;
+                carried_response += w_scope * carried[b];
+                const Eigen::Matrix3d w =
+                    w_scope + ca.frame.transpose() *
+                                  compliance_->point_block(ca.colon_segment, ca.colon_weight,
+                                                           cb.colon_segment, cb.colon_weight) *
+                                  cb.frame;
                 const Eigen::Matrix3d w_local =
                     a == b ? Eigen::Matrix3d(w + wall_compliance[a] * Eigen::Matrix3d::Identity())
                            : w;
@@ -450,16 +514,23 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
                         w_local(static_cast<Eigen::Index>(i / 3), static_cast<Eigen::Index>(i % 3));
             }
             // Free relative motion over the step: the gap along n; along t, s the scope's free
-            // motion relative to the colon returning to rest from where the last forces held it.
+            // motion relative to the wall returning to rest from where the last forces held it —
+            // the colon beam's deflection and the wall's local spring at this node (without the
+            // spring's, a sticking contact would slide by compliance x force every step: the
+            // friction felt would depend on speed x time step, not on Coulomb's law alone).
             Eigen::Vector3d colon_last = Eigen::Vector3d::Zero();
             for (const ColonPointForce& f : colon_forces_)
                 colon_last += compliance_->point_block(ca.colon_segment, ca.colon_weight, f.segment,
                                                        f.weight) *
                               f.force_N;
-            const Eigen::Vector3d relative =
-                scope_.position(ca.scope_node) - start.positions[ca.scope_node] + colon_last;
-            problem.free_displacement[a] = {ca.gap_mm, ca.frame.col(1).dot(relative),
-                                            ca.frame.col(2).dot(relative)};
+            const Eigen::Vector3d relative = scope_.position(ca.scope_node) -
+                                             start.positions[ca.scope_node] + colon_last +
+                                             wall_deflection_mm_[ca.scope_node];
+            // delta = W f + delta_free with the carried forces' scope response taken out: the
+            // free motion above already holds it (W f_carried, scope part).
+            problem.free_displacement[a] = {ca.gap_mm - carried_response.x(),
+                                            ca.frame.col(1).dot(relative) - carried_response.y(),
+                                            ca.frame.col(2).dot(relative) - carried_response.z()};
             // Sliding speed for the effects: the node's velocity relative to the wall over the last
             // step (the colon's from its displacement now and one step earlier), across the normal.
             double sliding_speed = 0.0;
@@ -477,7 +548,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             }
             mu[a] = friction_at(arc_from_tip_mm(ca.scope_node), ca.region, sliding_speed);
             problem.friction[a] = mu[a];
-            forces[a] = warm_start_[ca.scope_node];
+            forces[a] = {carried[a].x(), carried[a].y(), carried[a].z()};
         }
         contact::GaussSeidelSettings<double> gs;
         gs.mode = contact::SweepMode::until_converged;
@@ -498,6 +569,15 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             report.failure = m.str();
             return report;
         }
+        // A contact whose W_aa is not positive definite is ignored by the solver (f = 0) and the
+        // scope would pass through the wall there: the step matrix is indefinite (a scope
+        // compressed beyond buckling); World::step retries with the material tangent.
+        if (solved.degenerate_contacts > 0) {
+            report.failure = "contact: " + std::to_string(solved.degenerate_contacts) +
+                             " contact(s) with a compliance that is not positive definite (the "
+                             "scope's step matrix is indefinite)";
+            return report;
+        }
         for (std::size_t a = 0; a < nc; ++a)
             if (!std::isfinite(forces[a][0] + forces[a][1] + forces[a][2])) {
                 std::ostringstream m;
@@ -509,11 +589,11 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
                 report.failure = m.str();
                 return report;
             }
-        // 5. Contact correction.
+        // 5. Contact correction: the change of the contact forces from those carried.
         for (std::size_t a = 0; a < nc; ++a) {
             const Eigen::Vector3d f(forces[a][0], forces[a][1], forces[a][2]);
             correction.segment<3>(static_cast<Eigen::Index>(6 * candidates[a].scope_node)) =
-                candidates[a].frame * f;
+                candidates[a].frame * (f - carried[a]);
         }
         const Eigen::VectorXd contact_increment = factorization_.solve(correction);
         if (!contact_increment.allFinite()) {
@@ -523,9 +603,21 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         scope_.apply_increment(contact_increment);
         increment_total += contact_increment;
         last_increment += contact_increment;
+        // A node that jumps farther than kMaxNodeStep_mm in one step (1 m/s at 10 ms) is no
+        // motion a hand or a colon makes: the linear step left its range, as it does when an
+        // indefinite step matrix (a scope compressed beyond buckling) amplifies a mode;
+        // World::step retries with the material tangent.
+        for (std::size_t k = 0; k < nodes; ++k)
+            if (increment_total.segment<3>(static_cast<Eigen::Index>(6 * k)).norm() >
+                kMaxNodeStep_mm) {
+                report.failure = "the step moved scope node " + std::to_string(k) +
+                                 " by more than " + std::to_string(kMaxNodeStep_mm) + " mm";
+                return report;
+            }
         // Reports: delta = W f + delta_free after the solve.
         std::vector<WorldContact> reports(nc);
         std::vector<ColonPointForce> colon_forces(nc);
+        wall_deflection_mm_.assign(nodes, Eigen::Vector3d::Zero());
         for (std::size_t a = 0; a < nc; ++a) {
             std::array<double, 3> delta = problem.free_displacement[a];
             for (std::size_t b = 0; b < nc; ++b)
@@ -554,6 +646,10 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             colon_forces[a] = {
                 c.colon_segment, c.colon_weight,
                 -(c.frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]))};
+            // The wall's local spring under the tangential force on the wall, -f_T (the normal
+            // part is measured afresh by the gap every step).
+            wall_deflection_mm_[c.scope_node] =
+                -wall_compliance[a] * (c.frame * Eigen::Vector3d(0.0, forces[a][1], forces[a][2]));
         }
         contact_reports_ = std::move(reports);
         previous_colon_forces_ = std::move(colon_forces_);
@@ -562,6 +658,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         contact_reports_.clear();
         previous_colon_forces_ = std::move(colon_forces_);
         colon_forces_.clear();
+        wall_deflection_mm_.assign(nodes, Eigen::Vector3d::Zero());
     }
     if (!increment_total.allFinite()) {
         report.failure = "the step produced a non-finite state";
@@ -570,7 +667,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
 
     // Handle: reactions of the held DOFs (linearised residual after the correction).
     const Eigen::VectorXd reaction =
-        unconstrained_.multiply(last_increment) - last_residual - correction;
+        unconstrained_.multiply(last_increment) - last_residual - correction - released;
     double force = command.force_controlled ? command.push_force_N : 0.0;
     double torque = command.torque_controlled ? command.torque_Nmm : 0.0;
     for (std::size_t k = 0; k < nodes; ++k) {
@@ -582,8 +679,12 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
     handle_torque_Nmm_ = torque;
     velocity_ = increment_total / h;
     warm_start_.assign(nodes, {0.0, 0.0, 0.0});
-    for (std::size_t a = 0; a < nc; ++a)
+    contact_force_N_.assign(nodes, Eigen::Vector3d::Zero());
+    for (std::size_t a = 0; a < nc; ++a) {
         warm_start_[candidates[a].scope_node] = forces[a];
+        contact_force_N_[candidates[a].scope_node] =
+            candidates[a].frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]);
+    }
     roll_rad_ += wrap_pi(roll_of(scope_.rotation(0)) - wrap_pi(roll_rad_));
     ++steps_taken_;
     time_s_ = static_cast<double>(steps_taken_) * h;  // no drift from summing h

@@ -220,6 +220,8 @@ public:
         std::vector<ColonPointForce> colon_forces, previous_colon_forces;
         std::vector<WorldContact> contacts;
         std::vector<std::array<double, 3>> warm_start;
+        std::vector<Eigen::Vector3d> wall_deflection_mm;
+        std::vector<Eigen::Vector3d> contact_force_N;
         CenterlineTracking tracking;
     };
     State state() const;
@@ -266,6 +268,14 @@ private:
         previous_colon_forces_;  // one step earlier: the wall's velocity for effects
     std::vector<WorldContact> contact_reports_;
     std::vector<std::array<double, 3>> warm_start_;  // last contact force (n, t, s) per scope node
+    /// Per scope node: the tangential deflection of the wall's local spring under the last step's
+    /// contact force [mm], computation frame (zero where there was no contact). A sticking contact
+    /// keeps its wall loaded: the next step starts from it (see World::step, "Free relative
+    /// motion").
+    std::vector<Eigen::Vector3d> wall_deflection_mm_;
+    /// Per scope node: the last step's contact force on the scope [N], computation frame. The
+    /// next step's free motion carries it (see World::attempt, "Free motion").
+    std::vector<Eigen::Vector3d> contact_force_N_;
     CenterlineTracking tracking_;
 
     // Work storage reused every step.
