@@ -236,33 +236,79 @@ double World::friction_at(double arc_from_tip, ColonRegion region,
     return std::max(0.0, mu);
 }
 
-WorldStepReport World::step(const HandleCommand& command) {
-    const ScopeBeam::Configuration saved = scope_.configuration();
-    WorldStepReport report = attempt(command, true);
-    if (!report.ok) {
-        // A scope pushed hard against a wall is compressed beyond buckling between its contacts:
-        // the full tangent (material + geometric) then makes the step matrix indefinite and the
-        // contact problem ill-posed. Retry with the material tangent alone, which stays positive
-        // definite; the exact internal force in the residual still drives the state to equilibrium.
-        scope_.restore(saved);
-        WorldStepReport retry = attempt(command, false);
-        if (retry.ok) {
-            retry.material_tangent_fallback = true;
-            return retry;
-        }
-        scope_.restore(saved);
-    }
-    return report;
-}
-
 namespace {
 /// Largest displacement of a scope node in one step that World::attempt accepts [mm].
 constexpr double kMaxNodeStep_mm = 10.0;
+/// How often a step may be halved before the material tangent is used instead (see World::step).
+constexpr int kMaxStepHalvings = 1;
+
+/// The report of two consecutive half steps as one step's.
+WorldStepReport combined(const WorldStepReport& first, const WorldStepReport& second) {
+    WorldStepReport r = second;
+    r.dropped_contacts = std::max(first.dropped_contacts, second.dropped_contacts);
+    r.sweeps = first.sweeps + second.sweeps;
+    r.contact_residual_N = std::max(first.contact_residual_N, second.contact_residual_N);
+    r.max_penetration_mm = std::max(first.max_penetration_mm, second.max_penetration_mm);
+    r.friction_work_Nmm = first.friction_work_Nmm + second.friction_work_Nmm;
+    r.substeps = first.substeps + second.substeps;
+    return r;
+}
 }  // namespace
 
-WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tangent) {
-    WorldStepReport report;
+WorldStepReport World::step(const HandleCommand& command) {
+    // A scope pushed hard against a wall is compressed beyond buckling between its contacts: the
+    // full tangent (material + geometric) can then make the step matrix indefinite and the contact
+    // problem ill-posed. Stiffness-proportional damping (b K / h) keeps it definite at smaller
+    // steps, so the step is first halved; only if that fails too is the material tangent alone
+    // used, which stays positive definite (the exact internal force in the residual still drives
+    // the state to equilibrium, but a slow contact state drifts: with it, a tip self-locked at
+    // 10 ms steps slipped where it held at 5 and 2 ms).
     const double h = settings_.time_step_s;
+    const State before = state();
+    WorldStepReport report = advance_with_full_tangent(command, h, time_s_, 0);
+    if (!report.ok) {
+        WorldStepReport retry = attempt(command, false, h, time_s_);
+        if (retry.ok) {
+            retry.material_tangent_fallback = true;
+            report = retry;
+        } else {
+            restore(before);
+            return report;
+        }
+    }
+    ++steps_taken_;
+    time_s_ = static_cast<double>(steps_taken_) * h;  // no drift from summing h
+    return report;
+}
+
+WorldStepReport World::advance_with_full_tangent(const HandleCommand& command, double h,
+                                                 double t_start_s, int halvings) {
+    const State before = state();
+    WorldStepReport report = attempt(command, true, h, t_start_s);
+    if (report.ok) return report;
+    restore(before);
+    if (halvings >= kMaxStepHalvings) return report;
+    const WorldStepReport first =
+        advance_with_full_tangent(halfway_command(command), 0.5 * h, t_start_s, halvings + 1);
+    if (first.ok) {
+        const WorldStepReport second =
+            advance_with_full_tangent(command, 0.5 * h, t_start_s + 0.5 * h, halvings + 1);
+        if (second.ok) return combined(first, second);
+    }
+    restore(before);
+    return report;
+}
+
+HandleCommand World::halfway_command(const HandleCommand& command) const {
+    HandleCommand half = command;
+    half.insertion_mm = 0.5 * (insertion_depth_mm() + command.insertion_mm);
+    half.roll_rad = roll_rad_ + 0.5 * wrap_pi(command.roll_rad - roll_rad_);
+    return half;
+}
+
+WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tangent, double h,
+                               double t_start_s) {
+    WorldStepReport report;
     const std::size_t nodes = scope_.node_count();
     const auto dofs = static_cast<Eigen::Index>(scope_.dof_count());
     if (!std::isfinite(command.insertion_mm) || !std::isfinite(command.push_force_N) ||
@@ -310,7 +356,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
     if (command.torque_controlled) f_ext(3) += command.torque_Nmm;
     if (!effects_.empty()) {
         WorldEffectView view;
-        view.time_s = time_s_ + h;
+        view.time_s = t_start_s + h;
         view.time_step_s = h;
         view.insertion_depth_mm = insertion_depth_mm();
         view.scope_radius_mm = scope_radius_mm_;
@@ -606,8 +652,8 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         // A node that jumps farther than kMaxNodeStep_mm in one step (1 m/s at 10 ms) is no
         // motion a hand or a colon makes: the linear step left its range, as it does when an
         // indefinite step matrix (a scope compressed beyond buckling) amplifies a mode;
-        // World::step retries with the material tangent.
-        for (std::size_t k = 0; k < nodes; ++k)
+        // World::step retries (a half step, then the material tangent, which always stands).
+        for (std::size_t k = 0; geometric_tangent && k < nodes; ++k)
             if (increment_total.segment<3>(static_cast<Eigen::Index>(6 * k)).norm() >
                 kMaxNodeStep_mm) {
                 report.failure = "the step moved scope node " + std::to_string(k) +
@@ -686,8 +732,6 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             candidates[a].frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]);
     }
     roll_rad_ += wrap_pi(roll_of(scope_.rotation(0)) - wrap_pi(roll_rad_));
-    ++steps_taken_;
-    time_s_ = static_cast<double>(steps_taken_) * h;  // no drift from summing h
     report.contacts = nc;
     report.ok = true;
     return report;

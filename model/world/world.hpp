@@ -153,7 +153,8 @@ struct WorldStepReport {
     double friction_work_Nmm =
         0;  ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
     bool material_tangent_fallback =
-        false;  ///< the full tangent failed; the step used the material one
+        false;                 ///< the full tangent failed; the step used the material one
+    std::size_t substeps = 1;  ///< 1, or 2^k when the full tangent needed k halvings of the step
 };
 
 class World {
@@ -242,7 +243,15 @@ private:
     /// Friction coefficient at a contact: scenario value, zones, then the effects' hooks.
     double friction_at(double arc_from_tip_mm, ColonRegion region,
                        double sliding_speed_mm_per_s) const;
-    WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent);
+    /// One step of `h` s from `t_start_s` with the full tangent; where that fails, as two half
+    /// steps (kMaxStepHalvings deep). Leaves the world as before and fails when that fails too.
+    WorldStepReport advance_with_full_tangent(const HandleCommand& command, double h,
+                                              double t_start_s, int halvings);
+    /// The command halfway from the present handle state to `command` (position and roll; applied
+    /// force and torque are held over the whole step).
+    HandleCommand halfway_command(const HandleCommand& command) const;
+    WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent, double h,
+                            double t_start_s);
 
     WorldSettings settings_;
     std::vector<std::shared_ptr<const WorldEffect>> effects_;

@@ -217,8 +217,10 @@ TEST(World, FrictionOnlyDissipatesAndNothingPenetratesInTheBend) {
 }
 
 TEST(World, SelfLockingAboveTheFrictionAngleSlidingBelow) {
-    const auto locked = contact_verification::push_through_tube(2.0, 1.2, 6.0, 1.5);
-    const auto sliding = contact_verification::push_through_tube(2.0, 0.05, 6.0, 1.5);
+    // The push ends at 4.5 s, before the stuck scope buckles into step-size dependent loops (see
+    // contact_verification::world_rows).
+    const auto locked = contact_verification::push_through_tube(2.0, 1.2, 4.5, 1.5);
+    const auto sliding = contact_verification::push_through_tube(2.0, 0.05, 4.5, 1.5);
     ASSERT_TRUE(locked.ok && sliding.ok) << locked.failure << sliding.failure;
     EXPECT_TRUE(locked.tip_sticking);
     EXPECT_LT(locked.tip_driving_angle_rad, std::atan(1.2));  // alpha < beta: stick (thesis 2.2.1)
