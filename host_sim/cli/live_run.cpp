@@ -118,6 +118,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     for (const auto& e : sc.effects)
         effects.push_back({{"name", e->name()}, {"parameters", e->parameters()}});
     s["truth_effects"] = effects;
+    if (sc.patient) s["patient"] = model::patient_to_json(*sc.patient);
     s["warnings"] = sum.warnings;
     s["files"] = files;
     report.summary = s;
