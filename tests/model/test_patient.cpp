@@ -15,9 +15,12 @@
 #include "model/model_error.hpp"
 #include "model/patient/patient.hpp"
 #include "model/patient/patient_random.hpp"
+#include "model_test_support.hpp"
 
 namespace scopekin::model {
 namespace {
+
+using testing::expect_model_error;
 
 constexpr double kScopeRadius_mm = 6.65;
 constexpr std::size_t kPatients = 1000;
@@ -53,15 +56,6 @@ std::vector<double> collect(const std::function<double(const PatientSpec&)>& f) 
     for (const PatientSpec& p : population())
         v.push_back(f(p));
     return v;
-}
-
-void expect_error(const std::function<void()>& run, const std::string& fragment) {
-    try {
-        run();
-        ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
-    } catch (const ModelError& e) {
-        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    }
 }
 
 // ---- the random numbers ---------------------------------------------------------------------
@@ -310,7 +304,7 @@ TEST(PatientJson, BadInputRefusedWithTheField) {
                       const std::string& fragment) {
         nlohmann::json j = good_patient();
         edit(j);
-        expect_error([&] { (void)read_patient(j, "p.json:"); }, fragment);
+        expect_model_error([&] { (void)read_patient(j, "p.json:"); }, fragment);
     };
     refused([](nlohmann::json& j) { j["colon"].erase("transverse_sag_mm"); },
             "p.json: colon.transverse_sag_mm: missing");

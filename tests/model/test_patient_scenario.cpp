@@ -13,9 +13,12 @@
 #include "model/patient/patient.hpp"
 #include "model/scenario/scenario.hpp"
 #include "model/scenario/simulation.hpp"
+#include "model_test_support.hpp"
 
 namespace scopekin::model {
 namespace {
+
+using testing::expect_model_error;
 
 nlohmann::json with_patient(const nlohmann::json& patient) {
     nlohmann::json doc = nlohmann::json::parse(R"({
@@ -25,15 +28,6 @@ nlohmann::json with_patient(const nlohmann::json& patient) {
   })");
     doc["patient"] = patient;
     return doc;
-}
-
-void expect_error(const std::function<void()>& run, const std::string& fragment) {
-    try {
-        run();
-        ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
-    } catch (const ModelError& e) {
-        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    }
 }
 
 TEST(PatientScenario, SeedGivesThePatientsColonFrictionAndScope) {
@@ -67,7 +61,7 @@ TEST(PatientScenario, FileIsReadRelativeToTheScenario) {
     const Scenario s = read_scenario(with_patient({{"file", "p.json"}}), (dir / "s.json").string());
     ASSERT_TRUE(s.patient.has_value());
     EXPECT_EQ(s.patient->seed, 9U);
-    expect_error(
+    expect_model_error(
         [&] {
             (void)read_scenario(with_patient({{"file", "none.json"}}), (dir / "s.json").string());
         },
@@ -78,41 +72,42 @@ TEST(PatientScenario, FileIsReadRelativeToTheScenario) {
 TEST(PatientScenario, ConflictsAndBadKeysRefusedWithThePath) {
     nlohmann::json both = with_patient({{"seed", 1}});
     both["colon"] = {{"bundled", "default"}};
-    expect_error([&] { (void)read_scenario(both, "s.json"); },
-                 "s.json: patient: a scenario takes either 'patient'");
+    expect_model_error([&] { (void)read_scenario(both, "s.json"); },
+                       "s.json: patient: a scenario takes either 'patient'");
     nlohmann::json regions = with_patient({{"seed", 1}});
     regions["colon_regions"] = nlohmann::json::object();
-    expect_error([&] { (void)read_scenario(regions, "s.json"); }, "s.json: colon_regions: ");
+    expect_model_error([&] { (void)read_scenario(regions, "s.json"); }, "s.json: colon_regions: ");
     nlohmann::json friction = with_patient({{"seed", 1}});
     friction["solver"] = {{"contact", {{"friction_coefficient", 0.3}}}};
-    expect_error([&] { (void)read_scenario(friction, "s.json"); },
-                 "s.json: solver.contact.friction_coefficient: the patient gives");
+    expect_model_error([&] { (void)read_scenario(friction, "s.json"); },
+                       "s.json: solver.contact.friction_coefficient: the patient gives");
     nlohmann::json profile = with_patient({{"seed", 1}});
     profile["truth_effects"] = {{{"name", "ei_profile"}}};
-    expect_error([&] { (void)read_scenario(profile, "s.json"); }, "truth_effects[0].name");
-    expect_error(
+    expect_model_error([&] { (void)read_scenario(profile, "s.json"); }, "truth_effects[0].name");
+    expect_model_error(
         [&] {
             (void)read_scenario(with_patient({{"seed", 1}, {"file", "p.json"}}), "s.json");
         },
         "s.json: patient: give exactly one of 'seed'");
-    expect_error([&] { (void)read_scenario(with_patient(nlohmann::json::object()), "s.json"); },
-                 "s.json: patient: give exactly one of 'seed'");
-    expect_error(
+    expect_model_error(
+        [&] { (void)read_scenario(with_patient(nlohmann::json::object()), "s.json"); },
+        "s.json: patient: give exactly one of 'seed'");
+    expect_model_error(
         [&] {
             (void)read_scenario(with_patient({{"seed", -1}}), "s.json");
         },
         "s.json: patient.seed: expected a whole number");
-    expect_error(
+    expect_model_error(
         [&] {
             (void)read_scenario(with_patient({{"seed", 1e30}}), "s.json");
         },
         "s.json: patient.seed: expected a whole number");
-    expect_error(
+    expect_model_error(
         [&] {
             (void)read_scenario(with_patient({{"seed", "x"}}), "s.json");
         },
         "s.json: patient.seed: expected a whole number");
-    expect_error([&] { (void)read_scenario(with_patient(7), "s.json"); }, "s.json: patient");
+    expect_model_error([&] { (void)read_scenario(with_patient(7), "s.json"); }, "s.json: patient");
 }
 
 TEST(PatientScenario, ShortRunThroughADrawnPatientCompletes) {
