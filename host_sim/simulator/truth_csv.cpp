@@ -51,6 +51,7 @@ TruthSample truth_sample(const model::truth::TruthReadout& r) {
     s.has_wall_force = r.has_wall_force;
     s.bow_region = r.bow_region;
     s.bow_mm = r.bow_mm;
+    s.region_bow_mm = r.region_bow_mm;
     s.scope_crosses = r.scope_crosses;
     return s;
 }
@@ -75,6 +76,8 @@ TruthSample blend(const TruthSample& a, const TruthSample& b, double w) {
         }
     r.max_wall_force_N = mix(a.max_wall_force_N, b.max_wall_force_N);
     r.bow_mm = mix(a.bow_mm, b.bow_mm);
+    for (std::size_t k = 0; k < r.region_bow_mm.size(); ++k)
+        r.region_bow_mm[k] = mix(a.region_bow_mm[k], b.region_bow_mm[k]);
     return r;
 }
 
@@ -148,9 +151,10 @@ nlohmann::ordered_json TruthRecorder::write(std::ostream* out,
 
     std::vector<std::string> types, regions;
     for (const truth::LoopEpisode& e : loops.episodes) {
-        const TruthSample& peak = rows[e.peak];
-        types.push_back(truth::loop_type(peak.bow_region, peak.scope_crosses));
-        regions.push_back(std::string(model::region_name(peak.bow_region)));
+        const truth::LoopShape shape = truth::classify_loop(
+            rows[e.onset].region_bow_mm, rows[e.peak].region_bow_mm, rows[e.peak].scope_crosses);
+        types.push_back(shape.type);
+        regions.push_back(std::string(model::region_name(shape.region)));
     }
 
     if (out != nullptr) {
@@ -203,7 +207,8 @@ nlohmann::ordered_json TruthRecorder::write(std::ostream* out,
                               {"efficiency_min_handle_mm", truth::kEfficiencyMinHandle_mm},
                               {"force_warning_N", truth::kForceWarning_N},
                               {"force_critical_N", truth::kForceCritical_N},
-                              {"force_clear_fraction", truth::kForceClearFraction}};
+                              {"force_clear_fraction", truth::kForceClearFraction},
+                              {"force_merge_gap_s", truth::kForceMergeGap_s}};
     Json loop_list = Json::array();
     for (std::size_t e = 0; e < loops.episodes.size(); ++e) {
         const truth::LoopEpisode& ep = loops.episodes[e];

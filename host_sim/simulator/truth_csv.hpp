@@ -34,6 +34,7 @@ struct TruthSample {
     bool has_wall_force = false;
     model::ColonRegion bow_region = model::ColonRegion::rectum;
     double bow_mm = 0;
+    model::truth::RegionBow region_bow_mm{};
     bool scope_crosses = false;
 };
 

@@ -207,8 +207,8 @@ std::vector<double> advance_efficiency(const RunSeries& run) {
     return out;
 }
 
-std::string loop_type(ColonRegion bow_region, bool scope_crosses) {
-    switch (bow_region) {
+std::string loop_type(ColonRegion region, bool scope_crosses) {
+    switch (region) {
         case ColonRegion::sigmoid: return scope_crosses ? "alpha" : "N";
         case ColonRegion::splenic_flexure:
         case ColonRegion::transverse:
@@ -217,9 +217,22 @@ std::string loop_type(ColonRegion bow_region, bool scope_crosses) {
     }
 }
 
+LoopShape classify_loop(const RegionBow& at_onset, const RegionBow& at_peak, bool crosses_at_peak) {
+    std::size_t grew = 0, most = 0;
+    for (std::size_t r = 1; r < at_peak.size(); ++r) {
+        if (at_peak[r] - at_onset[r] > at_peak[grew] - at_onset[grew]) grew = r;
+        if (at_peak[r] > at_peak[most]) most = r;
+    }
+    const std::size_t pick = at_peak[grew] - at_onset[grew] > 0.0 ? grew : most;
+    LoopShape shape;
+    shape.region = kColonRegionsInOrder[pick];
+    shape.type = loop_type(shape.region, crosses_at_peak);
+    return shape;
+}
+
 std::vector<ForceEpisode> force_episodes(const std::vector<double>& time_s,
                                          const std::vector<double>& force_N, double threshold_N,
-                                         double clear_fraction) {
+                                         double clear_fraction, double merge_gap_s) {
     const std::string what = "force episodes";
     check_time(time_s, what);
     check_series(force_N, time_s.size(), what, "force_N");
@@ -229,6 +242,9 @@ std::vector<ForceEpisode> force_episodes(const std::vector<double>& time_s,
     if (!(clear_fraction > 0 && clear_fraction <= 1))
         throw ModelError(what + ": clear fraction " + number_text(clear_fraction) +
                          " must be in (0, 1]");
+    if (!(merge_gap_s >= 0) || !std::isfinite(merge_gap_s))
+        throw ModelError(what + ": merge gap " + number_text(merge_gap_s) +
+                         " s must be finite and >= 0");
     for (std::size_t i = 0; i < force_N.size(); ++i)
         if (force_N[i] < 0)
             throw ModelError(what + ": force_N[" + std::to_string(i) +
@@ -240,6 +256,17 @@ std::vector<ForceEpisode> force_episodes(const std::vector<double>& time_s,
         if (!active) {
             if (force_N[i] >= threshold_N) {
                 active = true;
+                if (!out.empty() && time_s[i] - *out.back().end_s < merge_gap_s - 1e-9) {
+                    current = out.back();  // a dip shorter than the merge gap: the same episode
+                    out.pop_back();
+                    current.end.reset();
+                    current.end_s.reset();
+                    if (force_N[i] > current.peak_N) {
+                        current.peak = i;
+                        current.peak_N = force_N[i];
+                    }
+                    continue;
+                }
                 current = ForceEpisode{};
                 current.onset = current.peak = i;
                 current.onset_s = time_s[i];

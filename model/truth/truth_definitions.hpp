@@ -7,6 +7,7 @@
 //
 // Inputs are checked: series of different lengths, non-finite values, time that does not
 // increase, or a bad threshold throw ModelError naming the series and the sample.
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -44,6 +45,9 @@ inline constexpr double kEfficiencyMinHandle_mm = 1.0;
 inline constexpr double kForceWarning_N = 10.0;
 inline constexpr double kForceCritical_N = 14.0;
 inline constexpr double kForceClearFraction = 0.9;
+/// An episode that starts less than kForceMergeGap_s after the previous one ended continues it
+/// (a force that dips below the clear level for a moment is one episode, not several).
+inline constexpr double kForceMergeGap_s = 0.5;
 
 /// A sampled run: one entry per sample, time strictly increasing.
 struct RunSeries {
@@ -86,11 +90,23 @@ std::optional<double> loop_onset_s(const RunSeries& run);
 /// over it.
 std::vector<double> advance_efficiency(const RunSeries& run);
 
-/// A loop's type from the shape at its largest excess (model/truth/README.md, "Type and
-/// region"): the colon region displaced farthest from rest and whether the inserted scope crosses
-/// itself in the frontal view. Sigmoid: "alpha" if it crosses, else "N"; splenic flexure,
-/// transverse, hepatic flexure: "gamma" if it crosses, else "transverse"; elsewhere "other".
-std::string loop_type(ColonRegion bow_region, bool scope_crosses);
+/// A loop's type from its region and whether the inserted scope crosses itself in the frontal
+/// view (model/truth/README.md, "Type and region"). Sigmoid: "alpha" if it crosses, else "N";
+/// splenic flexure, transverse, hepatic flexure: "gamma" if it crosses, else "transverse";
+/// elsewhere "other".
+std::string loop_type(ColonRegion region, bool scope_crosses);
+
+/// How far each region's centerline has moved from rest [mm] (the largest over its points), in
+/// kColonRegionsInOrder order.
+using RegionBow = std::array<double, 8>;
+struct LoopShape {
+    ColonRegion region = ColonRegion::rectum;
+    std::string type;
+};
+/// A loop episode's region and type: the region whose bow grew most from the onset to the
+/// largest excess (where the scope took the colon with it; if none grew, the one that bows most
+/// at the largest excess), typed by loop_type with the crossing at the largest excess.
+LoopShape classify_loop(const RegionBow& at_onset, const RegionBow& at_peak, bool crosses_at_peak);
 
 struct ForceEpisode {
     std::size_t onset = 0;
@@ -102,11 +118,13 @@ struct ForceEpisode {
 };
 
 /// Episodes of `force_N` >= `threshold_N`, each ending at the first sample below
-/// `clear_fraction` x `threshold_N`. Throws ModelError for a threshold that is not positive, a
+/// `clear_fraction` x `threshold_N`; one that starts less than `merge_gap_s` after the previous
+/// one's end continues it. Throws ModelError for a threshold that is not positive, a
 /// fraction outside (0, 1], forces that are negative or not finite, or lengths that differ.
 std::vector<ForceEpisode> force_episodes(const std::vector<double>& time_s,
                                          const std::vector<double>& force_N, double threshold_N,
-                                         double clear_fraction = kForceClearFraction);
+                                         double clear_fraction = kForceClearFraction,
+                                         double merge_gap_s = kForceMergeGap_s);
 
 /// Per sample: 0 normal, 1 in a warning episode (>= kForceWarning_N), 2 in a critical one.
 std::vector<int> force_levels(const std::vector<double>& time_s,

@@ -117,7 +117,12 @@ TruthReadout TruthReader::read(const World& world) const {
     TruthReadout r;
     r.time_s = world.time_s();
     r.insertion_mm = world.insertion_depth_mm();
-    const std::vector<Eigen::Vector3d> now = world.colon_positions_mm();
+    // The displaced centerline, point by point: World::colon_position_mm sums the colon's
+    // compliance blocks of the loaded points only (O(points x loads)), where colon_positions_mm
+    // multiplies the whole dense compliance matrix (O(points^2)): 7 % of a simulate run's time.
+    std::vector<Eigen::Vector3d> now(points.size());
+    for (std::size_t i = 0; i < now.size(); ++i)
+        now[i] = world.colon_position_mm(i);
     const std::vector<double> arc = displaced_arc_lengths(now);
 
     // Stations: the place and frame World::probe_stations gives them (same window, same rule).
@@ -192,9 +197,13 @@ TruthReadout TruthReader::read(const World& world) const {
     // Loop shape: the colon point moved farthest, and whether the inserted scope crosses itself.
     for (std::size_t i = 0; i < now.size(); ++i) {
         const double moved = (now[i] - points[i].position_mm).norm();
+        const ColonRegion region = points[std::min(i, points.size() - 2)].region;
+        for (std::size_t g = 0; g < kColonRegionsInOrder.size(); ++g)
+            if (kColonRegionsInOrder[g] == region)
+                r.region_bow_mm[g] = std::max(r.region_bow_mm[g], moved);
         if (moved > r.bow_mm) {
             r.bow_mm = moved;
-            r.bow_region = points[std::min(i, points.size() - 2)].region;
+            r.bow_region = region;
         }
     }
     std::vector<Eigen::Vector3d> inserted;

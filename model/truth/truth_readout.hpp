@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "model/colon/colon_region.hpp"
+#include "model/truth/truth_definitions.hpp"
 #include "model/world/world.hpp"
 
 namespace scopekin::model::truth {
@@ -74,6 +75,7 @@ struct TruthReadout {
     bool has_wall_force = false;
     ColonRegion bow_region = ColonRegion::rectum;  ///< region of the colon point moved farthest
     double bow_mm = 0;                             ///< how far it moved from rest
+    RegionBow region_bow_mm{};   ///< per region (kColonRegionsInOrder), its farthest move
     bool scope_crosses = false;  ///< the inserted scope crosses itself in the frontal view
 };
 

@@ -164,23 +164,56 @@ TEST(ForceEpisodes, OnsetAtTheThresholdEndBelowNinetyPercentOfIt) {
     std::vector<double> t;
     for (std::size_t i = 0; i < f.size(); ++i)
         t.push_back(0.1 * static_cast<double>(i));
-    const std::vector<ForceEpisode> w = force_episodes(t, f, kForceWarning_N);
+    // Hysteresis alone (no merging of episodes close in time).
+    const std::vector<ForceEpisode> w =
+        force_episodes(t, f, kForceWarning_N, kForceClearFraction, 0.0);
     ASSERT_EQ(w.size(), 2U);
     EXPECT_EQ(w[0].onset, 3U);  // 10 N reaches the threshold
     EXPECT_EQ(*w[0].end, 8U);   // 9.5 and 9.0 stay in the band; 8.99 < 9 ends it
     EXPECT_DOUBLE_EQ(w[0].peak_N, 12.0);
     EXPECT_EQ(w[1].onset, 10U);
     EXPECT_EQ(*w[1].end, 14U);
-    const std::vector<ForceEpisode> c = force_episodes(t, f, kForceCritical_N);
+    const std::vector<ForceEpisode> c =
+        force_episodes(t, f, kForceCritical_N, kForceClearFraction, 0.0);
     ASSERT_EQ(c.size(), 1U);
     EXPECT_EQ(c[0].onset, 10U);
     EXPECT_EQ(*c[0].end, 13U);  // 12.7 >= 12.6 stays, 12.5 ends
     const std::vector<int> level = force_levels(t, f);
-    EXPECT_EQ(level, (std::vector<int>{0, 0, 0, 1, 1, 1, 1, 1, 0, 0, 2, 2, 2, 1, 0}));
+    // With the default merging the two warning episodes (0.2 s apart) are one.
+    EXPECT_EQ(level, (std::vector<int>{0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2, 1, 0}));
+    // A dip below the clear level shorter than kForceMergeGap_s continues the episode; a longer
+    // one ends it (samples every 0.1 s: a 0.3 s dip merges, a 0.6 s one does not).
+    const std::vector<double> dips{12, 8, 8, 8, 12, 8, 8, 8, 8, 8, 8, 12, 5};
+    std::vector<double> td;
+    for (std::size_t i = 0; i < dips.size(); ++i)
+        td.push_back(0.1 * static_cast<double>(i));
+    const std::vector<ForceEpisode> merged = force_episodes(td, dips, kForceWarning_N);
+    ASSERT_EQ(merged.size(), 2U);
+    EXPECT_EQ(merged[0].onset, 0U);
+    EXPECT_EQ(*merged[0].end, 5U);
+    EXPECT_EQ(merged[1].onset, 11U);
+    EXPECT_EQ(*merged[1].end, 12U);
     // An episode still up at the end has no end.
     const std::vector<ForceEpisode> open = force_episodes({0, 1}, {0, 20}, 14.0);
     ASSERT_EQ(open.size(), 1U);
     EXPECT_FALSE(open[0].end.has_value());
+}
+
+TEST(LoopType, TheRegionIsTheOneThatBowedDuringTheEpisode) {
+    // The sigmoid still bows 60 mm from an earlier loop, but only the transverse colon moved from
+    // the onset to the peak: a transverse loop; crossing in the frontal view makes it a gamma.
+    RegionBow onset{}, peak{};
+    onset[1] = 60.0;  // sigmoid
+    peak[1] = 60.0;
+    peak[4] = 35.0;  // transverse
+    LoopShape shape = classify_loop(onset, peak, false);
+    EXPECT_EQ(shape.region, ColonRegion::transverse);
+    EXPECT_EQ(shape.type, "transverse");
+    EXPECT_EQ(classify_loop(onset, peak, true).type, "gamma");
+    // Nothing grew: the region bowing most.
+    shape = classify_loop(peak, peak, true);
+    EXPECT_EQ(shape.region, ColonRegion::sigmoid);
+    EXPECT_EQ(shape.type, "alpha");
 }
 
 TEST(LoopType, RegionAndCrossingGiveTheType) {
@@ -220,6 +253,11 @@ TEST(TruthBadInput, RefusedNamingTheSeriesAndTheSample) {
             force_episodes({0, 1}, {1, -2}, 10.0);
         },
         "force_N[1] = -2 is negative");
+    expect_model_error(
+        [&] {
+            force_episodes({0, 1}, {1, 2}, 10.0, 0.9, -1.0);
+        },
+        "merge gap -1 s must be finite and >= 0");
     expect_model_error([&] { force_episodes({0, 1}, {1}, 10.0); }, "force_N has 1 samples");
     expect_model_error(
         [&] {
