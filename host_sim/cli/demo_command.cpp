@@ -85,7 +85,7 @@ int run_demo(const DemoOptions& options) {
         const double wall =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::printf(
-            "\nwrote into %s: recording.csv, world.csv, firmware.csv, snapshots.json, "
+            "\nwrote into %s: recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, "
             "summary.json, forces.png, "
             "advance.png, snapshots.png (%.1f s in all)\n",
             dir.string().c_str(), wall);
@@ -100,22 +100,22 @@ int run_demo(const DemoOptions& options) {
 
 void add_demo_command(CLI::App& app) {
     auto options = std::make_shared<DemoOptions>();
-    CLI::App* cmd =
-        app.add_subcommand("demo",
-                           "The main job: a simulated colonoscopy through the bundled default "
-                           "colon and the unmodified firmware "
-                           "(host_sim/scenarios/demo_n_loop.json): the tip locks at the "
-                           "sigmoid-descending junction, an N-shaped sigmoid "
-                           "loop forms, the box's self-lock alarm fires, the physician withdraws "
-                           "with clockwise torque to straighten "
-                           "it and advances again, steering the tip while the assistant presses on "
-                           "the abdomen, into the cecum. Prints "
-                           "the alarm timeline, the box's fault flags and a summary table; writes "
-                           "recording.csv, world.csv, firmware.csv, snapshots.json, summary.json "
-                           "and the plots forces.png, advance.png, "
-                           "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid "
-                           "scenario, 3 an output (or a plot) "
-                           "cannot be written.");
+    CLI::App* cmd = app.add_subcommand(
+        "demo",
+        "The main job: a simulated colonoscopy through the bundled default "
+        "colon and the unmodified firmware "
+        "(host_sim/scenarios/demo_n_loop.json): the tip locks at the "
+        "sigmoid-descending junction, an N-shaped sigmoid "
+        "loop forms, the box's self-lock alarm fires, the physician withdraws "
+        "with clockwise torque to straighten "
+        "it and advances again, steering the tip while the assistant presses on "
+        "the abdomen, into the cecum. Prints "
+        "the alarm timeline, the box's fault flags and a summary table; writes "
+        "recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, summary.json "
+        "and the plots forces.png, advance.png, "
+        "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid "
+        "scenario, 3 an output (or a plot) "
+        "cannot be written.");
     cmd->add_option("--out", options->out,
                     "Output directory (default: a new folder scopekin-demo-YYYYMMDD-HHMMSS here; "
                     "its name is printed)");

@@ -23,13 +23,15 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     const sensors::SensorSuiteConfig sensor_config =
         sensors::read_sensor_config(sc.sensors, sc.sensors_path);
     const fs::path dir = options.out;
-    prepare_directory(dir, {"summary.json", "recording.csv", "recording.incomplete.csv",
-                            "world.csv", "world.incomplete.csv", "firmware.csv",
-                            "firmware.incomplete.csv", "contacts.csv", "contacts.incomplete.csv",
-                            "snapshots.json", "forces.png", "advance.png", "snapshots.png"});
+    prepare_directory(
+        dir, {"summary.json", "recording.csv", "recording.incomplete.csv", "world.csv",
+              "world.incomplete.csv", "firmware.csv", "firmware.incomplete.csv", "truth.csv",
+              "truth.incomplete.csv", "contacts.csv", "contacts.incomplete.csv", "snapshots.json",
+              "forces.png", "advance.png", "snapshots.png"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     PartFile world(dir / "world.csv", dir / "world.incomplete.csv");
     PartFile firmware(dir / "firmware.csv", dir / "firmware.incomplete.csv");
+    PartFile truth(dir / "truth.csv", dir / "truth.incomplete.csv");
     std::unique_ptr<PartFile> contacts;
     if (sc.outputs.contacts_file)
         contacts =
@@ -43,7 +45,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     LiveRunReport report;
     report.result = host_sim::run_live(sc, sensor_config, options.seed,
                                        {&recording.stream(), &world.stream(), &firmware.stream(),
-                                        contacts ? &contacts->stream() : nullptr},
+                                        contacts ? &contacts->stream() : nullptr, &truth.stream()},
                                        [&](const model::SimulationProgress& p) { bar.update(p); });
     bar.done();
     const host_sim::LiveResult& r = report.result;
@@ -53,6 +55,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     files["recording"] = recording.finish(sum.complete).filename().string();
     files["world"] = world.finish(sum.complete).filename().string();
     files["firmware"] = firmware.finish(sum.complete).filename().string();
+    files["truth"] = truth.finish(sum.complete).filename().string();
     if (contacts) files["contacts"] = contacts->finish(sum.complete).filename().string();
     write_json(dir / "snapshots.json", r.snapshots);
     files["snapshots"] = "snapshots.json";
@@ -103,6 +106,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     s["firmware"]["estimator_periods"] = r.firmware_periods;
     s["box"] = r.box_section;
     s["sensors"] = r.sensor_counters;
+    s["truth"] = r.truth;
     s["rows_delivered"] = r.rows_delivered;
     Json world_stats;
     world_stats["max_contact_force_N"] = sum.max_contact_force_N;
@@ -118,6 +122,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     for (const auto& e : sc.effects)
         effects.push_back({{"name", e->name()}, {"parameters", e->parameters()}});
     s["truth_effects"] = effects;
+    if (sc.patient) s["patient"] = model::patient_to_json(*sc.patient);
     s["warnings"] = sum.warnings;
     s["files"] = files;
     report.summary = s;

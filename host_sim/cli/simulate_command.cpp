@@ -66,7 +66,9 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
         s["real_time_factor"].get<double>(), s["peak_handle_force_N"]["true"].get<double>(),
         s["alarms"].size());
     std::printf(
-        "wrote recording.csv, world.csv, firmware.csv, snapshots.json, summary.json into %s\n",
+        "wrote recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, summary.json "
+        "into "
+        "%s\n",
         dir.string().c_str());
     return 0;
 }
@@ -139,7 +141,10 @@ void add_simulate_command(CLI::App& app) {
         "DIR/recording.csv (what the "
         "sensors delivered, host_sim/recording/RECORDING.md), DIR/world.csv (the true state at "
         "outputs.sample_rate_Hz), "
-        "DIR/firmware.csv (the box's outputs and fault bits per period), DIR/snapshots.json and "
+        "DIR/firmware.csv (the box's outputs and fault bits per period), DIR/truth.csv (what the "
+        "box "
+        "estimates, true, at the same periods: host_sim/README.md, model/truth/README.md; its "
+        "episodes in the summary's \"truth\"), DIR/snapshots.json and "
         "DIR/summary.json. "
         "A free beam "
         "scenario is solved statically: DIR/recording.csv has one row per output node. While "

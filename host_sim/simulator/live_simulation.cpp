@@ -7,8 +7,10 @@
 #include "host_sim/recording/recording_format.hpp"
 #include "host_sim/recording/wire_values.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
+#include "host_sim/simulator/truth_csv.hpp"
 #include "host_sim/simulator/world_csv.hpp"
 #include "host_sim/simulator/world_readout.hpp"
+#include "kinetics/default_reduced_tables.hpp"
 
 namespace scopekin::host_sim {
 namespace {
@@ -72,6 +74,16 @@ LiveResult run_live(const model::Scenario& scenario,
     LiveResult result;
     std::unique_ptr<model::World> world = model::build_world(scenario);
     WorldReader reader(*world);
+    // Ground truth at the estimator's stations (the firmware's tables say how many and where).
+    const auto& tables_header = kinetics::default_reduced_tables().header();
+    const model::truth::TruthReader truth_reader(
+        *world,
+        model::truth::station_layout(
+            *world, tables_header.stations,
+            static_cast<double>(tables_header.station_spacing_mm.raw()) / 65536.0),
+        scenario.settings.gravity_mm_per_s2);
+    TruthRecorder truth;
+    std::vector<std::uint64_t> period_times_us;
     sensors::SensorSuite suite(sensor_config, seed);
     std::unique_ptr<recording::RecordingWriter> recording_writer;
     if (streams.recording != nullptr)
@@ -81,6 +93,7 @@ LiveResult run_live(const model::Scenario& scenario,
     std::string snapshot_label;
     BoxObserver observer(streams.firmware);
     FirmwareLoop firmware([&](const BoxPeriod& period) {
+        period_times_us.push_back(period.time_us);
         const std::size_t alarms_before = observer.observation().alarms.size();
         observer.observe(period);
         const auto& alarms = observer.observation().alarms;
@@ -114,6 +127,7 @@ LiveResult run_live(const model::Scenario& scenario,
     };
 
     WorldReadout previous = reader.read(*world);
+    truth.add(truth_sample(truth_reader.read(*world)));
     WorldReadout latest = previous;
     std::int64_t last_tick_us = to_us(world->time_s());
     std::int64_t last_delivered_us = 0;  // the box runs up to the last row, as `scopekin run` does
@@ -127,6 +141,7 @@ LiveResult run_live(const model::Scenario& scenario,
     model::SimulationCallbacks callbacks;
     callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
         latest = reader.read(w);
+        truth.add(truth_sample(truth_reader.read(w)));
         const std::int64_t now_us = to_us(w.time_s());
         const double span_us = static_cast<double>(now_us - to_us(previous.time_s));
         for (std::int64_t t = last_tick_us + sensors::kTickUs; t <= now_us; t += sensors::kTickUs) {
@@ -193,6 +208,7 @@ LiveResult run_live(const model::Scenario& scenario,
     result.final_tip_path_mm = latest.tip_path_mm;
     result.final_tip_region = latest.tip_region;
     result.sensor_counters = sensor_counters_json(suite.counters());
+    result.truth = truth.write(streams.truth, period_times_us, truth_reader.layout().stations);
     result.wall_time_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     return result;

@@ -25,6 +25,8 @@ struct LiveStreams {
     std::ostream* firmware = nullptr;   ///< firmware.csv (the box's outputs per period)
     std::ostream* contacts =
         nullptr;  ///< contacts.csv (loaded contacts at the output rate), optional
+    std::ostream* truth =
+        nullptr;  ///< truth.csv (what the box estimates, true, per box period), optional
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand
@@ -50,6 +52,7 @@ struct LiveResult {
     std::uint64_t rows_delivered = 0;
     std::uint64_t firmware_periods = 0;
     nlohmann::ordered_json sensor_counters;
+    nlohmann::ordered_json truth;  ///< summary "truth": definitions, loop and force episodes
     double wall_time_s = 0;
 };
 

@@ -10,6 +10,7 @@
 #include "model/colon/bundled_colons.hpp"
 #include "model/colon/colon_beam.hpp"
 #include "model/effects/effect_library.hpp"
+#include "model/effects/ei_profile.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
 #include "model/scenario/abdominal_pressure.hpp"
@@ -328,6 +329,40 @@ void read_procedure(const JsonObject& root, Scenario& sc) {
     sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
 }
 
+/// "patient": {"seed": N} (draw_patient) or {"file": "patient.json"} (relative to the scenario
+/// file, read_patient_file).
+PatientSpec read_patient_key(const JsonObject& o, const std::string& source) {
+    if (o.has("seed") == o.has("file"))
+        throw ModelError(o.path() +
+                         ": give exactly one of 'seed' (a patient drawn from the family) or "
+                         "'file' (a patient file, relative to this scenario)");
+    if (o.has("seed")) {
+        o.allow_only({"seed"});
+        return draw_patient(read_patient_seed(o, "seed"));
+    }
+    o.allow_only({"file"});
+    const std::string name = o.string("file");
+    if (name.empty()) throw ModelError(o.field("file") + ": empty file name");
+    const std::filesystem::path file =
+        std::filesystem::path(source).parent_path() / std::filesystem::path(name);
+    try {
+        return read_patient_file(file.string());
+    } catch (const ModelError& e) {
+        throw ModelError(o.field("file") + ": " + e.what());
+    }
+}
+
+/// The patient's scope: EI x ei_factor everywhere, x distal_section_factor over its distal
+/// section (an ei_profile with equal tip and handle factors).
+std::shared_ptr<const WorldEffect> make_patient_scope(const PatientSpec& p) {
+    EiProfile::Parameters e;
+    e.tip_factor = p.ei_factor;
+    e.handle_factor = p.ei_factor;
+    e.bending_section_length_mm = p.distal_section_length_mm;
+    e.bending_section_factor = p.distal_section_factor;
+    return std::make_shared<EiProfile>(e);
+}
+
 std::shared_ptr<const WorldEffect> make_tip_steering(const Scenario& sc) {
     const double element_mm = sc.scope.length_mm / static_cast<double>(sc.scope.elements);
     return std::make_shared<TipSteering>(sc.steering, *sc.colon,
@@ -340,16 +375,22 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
     const JsonObject root(document, source + ":");
     Scenario sc;
     sc.source = source;
-    const bool beam = root.has("beam"), colon = root.has("colon");
-    if (beam && colon)
-        throw ModelError(
-            source +
-            ": has both 'beam' (a free beam scenario) and 'colon' (a world scenario); give one");
-    if (!beam && !colon)
+    const bool beam = root.has("beam"), colon = root.has("colon"), patient = root.has("patient");
+    if (beam && (colon || patient))
+        throw ModelError(source + ": has both 'beam' (a free beam scenario) and '" +
+                         (colon ? "colon" : "patient") + "' (a world scenario); give one");
+    if (!beam && !colon && !patient)
         throw ModelError(source +
-                         ": has neither 'colon' (a world scenario: the scope in a colon) nor "
-                         "'beam' (a free beam "
-                         "scenario: a beam problem file)");
+                         ": has neither 'colon' or 'patient' (a world scenario: the scope in a "
+                         "colon) nor 'beam' (a free beam scenario: a beam problem file)");
+    if (colon && patient)
+        throw ModelError(root.field("patient") +
+                         ": a scenario takes either 'patient' (its colon, regions, friction and "
+                         "scope stiffness) or 'colon', not both");
+    if (patient && root.has("colon_regions"))
+        throw ModelError(root.field("colon_regions") +
+                         ": the patient gives the region properties; remove 'colon_regions' or "
+                         "'patient'");
     if (root.has("description")) sc.description = root.string("description");
     if (beam) {
         sc.kind = ScenarioKind::free_beam;
@@ -360,11 +401,22 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
     sc.kind = ScenarioKind::world;
     root.allow_only({"description", "colon", "colon_regions", "scope", "gravity_mm_per_s2",
                      "initial_insertion_mm", "solver", "procedure", "outputs", "truth_effects",
-                     "sensors", "steering", "abdominal_pressure"});
+                     "sensors", "steering", "abdominal_pressure", "patient"});
     sc.scope = read_scope(root.object("scope"), sc.scope_model);
-    sc.colon = read_colon(root.object("colon"), sc.scope.radius_mm);
+    if (patient) {
+        const JsonObject key = root.object("patient");
+        sc.patient = read_patient_key(key, source);
+        try {
+            sc.colon = patient_colon(*sc.patient, sc.scope.radius_mm);
+        } catch (const ModelError& e) {
+            throw ModelError(key.path() + ": " + e.what());
+        }
+    } else {
+        sc.colon = read_colon(root.object("colon"), sc.scope.radius_mm);
+    }
 
-    sc.colon_properties = default_colon_properties();
+    sc.colon_properties =
+        sc.patient ? patient_colon_properties(*sc.patient) : default_colon_properties();
     if (root.has("colon_regions")) {
         const JsonObject regions = root.object("colon_regions");
         const nlohmann::json& raw = root.raw("colon_regions");
@@ -403,6 +455,16 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
         root.vector3_or("gravity_mm_per_s2", sc.settings.gravity_mm_per_s2);
     if (with_run) set_initial_insertion(sc, non_negative_or(root, "initial_insertion_mm", 0.0));
     if (root.has("solver")) read_solver(root.object("solver"), sc.settings);
+    if (sc.patient) {
+        const nlohmann::json* contact = root.has("solver") && root.raw("solver").contains("contact")
+                                            ? &root.raw("solver").at("contact")
+                                            : nullptr;
+        if (contact != nullptr && contact->contains("friction_coefficient"))
+            throw ModelError(root.field("solver") +
+                             ".contact.friction_coefficient: the patient gives the friction "
+                             "coefficient; remove it or 'patient' (friction_zones still apply)");
+        sc.settings.contact.friction_coefficient = sc.patient->friction_coefficient;
+    }
     try {
         sc.settings.validate();  // backstop: every field above is already checked with its path
     } catch (const ModelError& e) {
@@ -413,6 +475,14 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
 
     if (root.has("truth_effects"))
         sc.effects = read_world_effects(root.array("truth_effects"), root.field("truth_effects"));
+    if (sc.patient) {
+        for (std::size_t i = 0; i < sc.effects.size(); ++i)
+            if (sc.effects[i]->name() == EiProfile::kName)
+                throw ModelError(item(root.field("truth_effects"), i) +
+                                 ".name: 'ei_profile' is the patient's scope already (patient "
+                                 "scope.ei_factor, distal_section_*); remove one");
+        sc.effects.push_back(make_patient_scope(*sc.patient));
+    }
     if (root.has("sensors")) {
         (void)root.object(
             "sensors");  // an object; its keys are read by the host simulator's sensor models
@@ -492,7 +562,7 @@ Scenario read_scenario(const nlohmann::json& document, const std::string& source
 Scenario read_world_model(const nlohmann::json& document, const std::string& source) {
     Scenario sc = read_document(document, source, false);
     if (sc.kind != ScenarioKind::world)
-        throw ModelError(source + ": not a world scenario (no colon)");
+        throw ModelError(source + ": not a world scenario (no colon or patient)");
     // Read (and so checked) with the rest; each run makes its own (scene_effects).
     sc.effects.clear();
     return sc;
@@ -510,6 +580,7 @@ void set_initial_insertion(Scenario& sc, double initial_insertion_mm) {
 
 std::vector<std::shared_ptr<const WorldEffect>> scene_effects(const Scenario& sc) {
     std::vector<std::shared_ptr<const WorldEffect>> effects;
+    if (sc.patient) effects.push_back(make_patient_scope(*sc.patient));
     if (!sc.steering.empty()) effects.push_back(make_tip_steering(sc));
     if (!sc.abdominal_pressure.empty())
         effects.push_back(std::make_shared<AbdominalPressure>(sc.abdominal_pressure));

@@ -1,8 +1,8 @@
 #pragma once
 // Scenario files (model/scenario/README.md): what `scopekin simulate` runs. Two kinds, told apart
 // by their top-level keys:
-//  * a world scenario ("colon"): a colon, a scope, solver settings, a procedure at the handle
-//    and the outputs wanted;
+//  * a world scenario ("colon", or "patient": a drawn or saved virtual patient, model/patient/):
+//    a colon, a scope, solver settings, a procedure at the handle and the outputs wanted;
 //  * a free beam scenario ("beam"): exactly a beam problem file (model/io/beam_problem.hpp),
 //    solved statically.
 // Read strictly: unknown keys, wrong types and unphysical values are rejected with the field's
@@ -17,6 +17,7 @@
 #include "model/colon/colon_region.hpp"
 #include "model/colon/colon_tube.hpp"
 #include "model/io/beam_problem.hpp"
+#include "model/patient/patient.hpp"
 #include "model/scenario/abdominal_pressure.hpp"
 #include "model/scenario/procedure.hpp"
 #include "model/scenario/tip_steering.hpp"
@@ -42,6 +43,10 @@ struct Scenario {
 
     // World scenario.
     std::optional<ColonTube> colon;
+    /// "patient": the virtual patient the colon, its regions, the friction coefficient and the
+    /// scope's EI profile come from (instead of "colon", "colon_regions" and
+    /// solver.contact.friction_coefficient); empty for a scenario with "colon".
+    std::optional<PatientSpec> patient;
     std::array<ColonRegionProperties, 8> colon_properties{};  ///< kColonRegionsInOrder order
     std::string scope_model = "cf_q160l";
     ScopeSpec scope;
@@ -76,8 +81,9 @@ Scenario read_world_model(const nlohmann::json& document, const std::string& sou
 /// Where the scope starts: "initial_insertion_mm" given by the runner (ModelError, naming the
 /// field under the scenario's source, if negative or not shorter than the scope).
 void set_initial_insertion(Scenario& scenario, double initial_insertion_mm);
-/// New instances of the effects the scenario's "steering" and "abdominal_pressure" windows add
-/// (in that order, after the truth effects); none for an empty list, which acts on nothing.
+/// New instances of the effects the scenario's patient (its scope's "ei_profile"), "steering" and
+/// "abdominal_pressure" windows add (in that order, after the truth effects); none for an absent
+/// patient or an empty list, which act on nothing.
 std::vector<std::shared_ptr<const WorldEffect>> scene_effects(const Scenario& scenario);
 /// Reads a scenario file. A key "model": "FILE" (relative to the scenario file; e.g. the model.json
 /// of `scopekin discrepancy`) takes every key from that model file that the scenario does not

@@ -5,10 +5,12 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <string>
 
 #include "model/colon/colon_tube.hpp"
+#include "model/model_error.hpp"
 #include "model/scope/cf_q160l.hpp"
 #include "model/world/world_effect.hpp"
 
@@ -73,6 +75,16 @@ inline ::testing::AssertionResult matrices_near(const Eigen::MatrixXd& actual,
            << "max |difference| " << error << " > " << tolerance << "\nactual:\n"
            << actual.format(fmt) << "\nexpected:\n"
            << expected.format(fmt);
+}
+
+/// Runs `run` and expects a ModelError whose message contains `fragment`.
+inline void expect_model_error(const std::function<void()>& run, const std::string& fragment) {
+    try {
+        run();
+        ADD_FAILURE() << "no error; expected one mentioning '" << fragment << "'";
+    } catch (const ModelError& e) {
+        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace scopekin::model::testing

@@ -620,11 +620,93 @@ def check_output_order():
             shutil.rmtree(out, ignore_errors=True)
 
 
-CHECKS = {"replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
+def check_patients():
+    # One patient: JSON on stdout, the same for the same seed, another for another seed.
+    a = json.loads(run("patient", "--seed", "3").stdout)
+    expect(a["seed"] == 3 and set(a) >= {"colon", "mechanics", "scope", "derived"}, f"patient JSON: {sorted(a)}")
+    expect(run("patient", "--seed", "3").stdout == run("patient", "--seed", "3").stdout, "same seed, same patient")
+    expect(run("patient", "--seed", "4").stdout != run("patient", "--seed", "3").stdout, "another seed, another patient")
+    lengths = a["colon"]["region_lengths_mm"]
+    expect(abs(sum(lengths.values()) - a["derived"]["total_length_mm"]) < 1e-6, "total length is the regions' sum")
+    d = fresh("patients")
+    os.makedirs(d)
+    out = os.path.join(d, "p3.json")
+    run("patient", "--seed", "3", "--out", out)
+    expect(json.load(open(out)) == a, "--out writes the same JSON")
+    # Bad seeds: usage errors, exit 2, naming the option.
+    for bad in ["-1", "1e30", "x", "18446744073709551616"]:
+        p = run("patient", "--seed", bad, expect_status=2)
+        expect("--seed" in p.stderr and "whole number" in p.stderr, f"--seed {bad}: {p.stderr[-300:]}")
+    run("patient", expect_status=2)
+    run("patients", "--count", "0", "--out", d, expect_status=2)
+    run("patients", "--count", "2", "--seed", "18446744073709551615", "--out", d, expect_status=2)
+    # A scenario with the saved patient runs (a second of advance).
+    scenario = os.path.join(d, "s.json")
+    with open(scenario, "w") as f:
+        json.dump({"patient": {"file": "p3.json"}, "scope": {"model": "cf_q160l"}, "initial_insertion_mm": 20,
+                   "procedure": [{"action": "advance", "start_s": 0, "end_s": 1, "speed_mm_per_s": 25}]}, f)
+    run("simulate", scenario, "--out", os.path.join(d, "run"), "--quiet")
+    s = json.load(open(os.path.join(d, "run", "summary.json")))
+    expect(s["status"] == "complete" and s["patient"]["seed"] == 3, "simulate with a patient file completes")
+    with open(scenario, "w") as f:
+        json.dump({"patient": {"seed": 3}, "colon": {"bundled": "default"}, "scope": {"model": "cf_q160l"},
+                   "procedure": [{"action": "hold", "start_s": 0, "end_s": 1}]}, f)
+    p = run("simulate", scenario, "--out", os.path.join(d, "run2"), "--quiet", expect_status=2)
+    expect("s.json: patient: a scenario takes either 'patient'" in p.stderr, f"patient and colon refused: {p.stderr}")
+    # A gallery: the four files, one CSV row and one panel per patient, a real PNG.
+    g = os.path.join(d, "gallery")
+    p = run("patients", "--count", "6", "--seed", "10", "--out", g, "--quiet")
+    for name in ["patients.json", "patients.csv", "centerlines.csv", "gallery.png"]:
+        expect(os.path.isfile(os.path.join(g, name)), f"patients wrote {name}")
+    table = rows(os.path.join(g, "patients.csv"))
+    expect([r["seed"] for r in table] == [str(s) for s in range(10, 16)], "one CSV row per seed")
+    listed = json.load(open(os.path.join(g, "patients.json")))
+    expect(listed["count"] == 6 and [x["seed"] for x in listed["patients"]] == list(range(10, 16)),
+           "patients.json lists the six")
+    expect(listed["redraws"] == sum(int(r["redraws"]) for r in table), "redraws add up")
+    checker = os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py")
+    c = subprocess.run(["/usr/bin/python3", checker, os.path.join(g, "gallery.png")], capture_output=True, text=True)
+    expect(c.returncode == 0, "the gallery is a non-trivial PNG: " + c.stdout + c.stderr)
+
+
+def check_truth():
+    # truth.csv beside world.csv: one row per box period, joined to firmware.csv by time_s (the
+    # same text) and period (its row number); h = 10 ms here, so half the rows are blended
+    # between world steps. A 20 -> 80 mm advance in the rectum: no loop, no force episode, the tip
+    # at the hand's pace (model/truth/README.md).
+    d = fresh("truth")
+    run("simulate", SHORT, "--out", d, "--quiet")
+    truth = rows(os.path.join(d, "truth.csv"))
+    fw = rows(os.path.join(d, "firmware.csv"))
+    expect(len(truth) == len(fw) == 600, f"truth.csv and firmware.csv: one row per 5 ms period of 3 s: {len(truth)}, {len(fw)}")
+    expect([r["time_s"] for r in truth] == [r["time_s"] for r in fw], "truth.csv's time_s is firmware.csv's, row by row")
+    expect([r["period"] for r in truth] == [str(i) for i in range(len(truth))], "period counts the rows from 0")
+    header = open(os.path.join(d, "truth.csv")).readline().strip().split(",")
+    for column in ["insertion_mm", "tip_path_mm", "tip_displaced_path_mm", "tip_region", "station_11_side_N",
+                   "max_station_force_N", "max_wall_force_N", "max_wall_path_mm", "advance_efficiency",
+                   "loop_excess_mm", "loop_episode", "loop_type", "loop_region", "force_level",
+                   "force_warning_episode", "force_critical_episode"]:
+        expect(column in header, f"truth.csv has {column}")
+    # The hand advances 20 mm/s from 20 mm: at 2 s, 60 mm (blended between world steps at 2.005 s).
+    at = {r["time_s"]: r for r in truth}
+    expect(abs(float(at["2.000000"]["insertion_mm"]) - 60.0) < 1e-3 and abs(float(at["2.005000"]["insertion_mm"]) - 60.1) < 1e-3,
+           f"insertion at 2 and 2.005 s: {at['2.000000']['insertion_mm']}, {at['2.005000']['insertion_mm']}")
+    expect(all(r["loop_episode"] == "0" and r["force_level"] == "0" for r in truth), "no loop or force episode")
+    eff = [float(r["advance_efficiency"]) for r in truth[100:] if r["advance_efficiency"]]
+    expect(eff and all(0.8 < e < 1.2 for e in eff), f"the tip keeps the hand's pace in the rectum: {min(eff)}..{max(eff)}")
+    expect(abs(float(truth[-1]["tip_path_mm"]) - 80.0) < 3.0, f"tip near 80 mm at the end: {truth[-1]['tip_path_mm']}")
+    s = json.load(open(os.path.join(d, "summary.json")))
+    expect(s["files"].get("truth") == "truth.csv", f"summary lists truth.csv: {s['files']}")
+    t = s.get("truth", {})
+    expect(t.get("periods") == 600 and t.get("loop_episodes") == [] and t.get("force_episodes", {}).get("warning_10N") == []
+           and t.get("definitions", {}).get("loop_onset_excess_mm") == 20.0, f"summary.json truth: {str(t)[:300]}")
+
+
+CHECKS = {"patients": check_patients, "replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
           "bad_recordings": check_bad_recordings, "batch": check_batch, "shell_injection": check_shell_injection,
           "hostile_json": check_hostile_json, "time_gap": check_time_gap, "option_ranges": check_option_ranges,
           "bom_and_long_lines": check_bom_and_long_lines, "box_faults": check_box_faults,
-          "output_order": check_output_order}
+          "output_order": check_output_order, "truth": check_truth}
 os.makedirs(WORK, exist_ok=True)
 CHECKS[CHECK]()
 if failures:
