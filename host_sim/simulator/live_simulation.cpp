@@ -78,7 +78,7 @@ LiveResult run_live(const model::Scenario& scenario,
     const auto& tables_header = kinetics::default_reduced_tables().header();
     const model::truth::TruthReader truth_reader(
         *world,
-        model::truth::station_layout(
+        model::truth::nearest_station_layout(
             *world, tables_header.stations,
             static_cast<double>(tables_header.station_spacing_mm.raw()) / 65536.0),
         scenario.settings.gravity_mm_per_s2);

@@ -38,6 +38,21 @@ StationLayout station_layout(const World& world, std::size_t stations, double sp
     return layout;
 }
 
+StationLayout nearest_station_layout(const World& world, std::size_t stations, double spacing_mm) {
+    require_positive(spacing_mm, "truth: station spacing_mm");
+    StationLayout layout;
+    layout.stations = stations;
+    layout.spacing_mm = spacing_mm;
+    const std::size_t tip = world.scope_node_count() - 1;
+    const double element_mm = world.scope_length_mm() / static_cast<double>(tip);
+    for (std::size_t j = 0; j < stations; ++j) {
+        const double back = std::round(spacing_mm * static_cast<double>(j) / element_mm);
+        if (back > static_cast<double>(tip)) break;
+        layout.nodes.push_back(tip - static_cast<std::size_t>(back));
+    }
+    return layout;
+}
+
 std::vector<double> displaced_arc_lengths(const std::vector<Eigen::Vector3d>& points_mm) {
     std::vector<double> arc(points_mm.size(), 0.0);
     for (std::size_t i = 1; i < points_mm.size(); ++i)
@@ -97,7 +112,9 @@ TruthReader::TruthReader(const World& world, StationLayout layout,
     : layout_(std::move(layout)), gravity_(gravity_mm_per_s2) {
     const ColonTube& colon = world.colon();
     if (colon.point_count() < 2) throw ModelError("truth: the colon has fewer than 2 points");
-    if (layout_.nodes.size() != layout_.stations)
+    if (layout_.stations == 0 || layout_.nodes.empty())
+        throw ModelError("truth: the station layout needs at least the tip's station");
+    if (layout_.nodes.size() > layout_.stations)
         throw ModelError("truth: station layout has " + std::to_string(layout_.nodes.size()) +
                          " nodes for " + std::to_string(layout_.stations) + " stations");
     for (std::size_t node : layout_.nodes)
@@ -126,9 +143,9 @@ TruthReadout TruthReader::read(const World& world) const {
     const std::vector<double> arc = displaced_arc_lengths(now);
 
     // Stations: the place and frame World::probe_stations gives them (same window, same rule).
-    const std::size_t k = layout_.stations;
-    r.stations.resize(k);
-    StationCompliance probe;  // increasing node order (station K-1 first), frames only
+    const std::size_t k = layout_.nodes.size();  // the stations on the scope
+    r.stations.resize(layout_.stations);
+    StationCompliance probe;  // increasing node order (station k-1 first), frames only
     probe.stations.resize(k);
     for (std::size_t s = 0; s < k; ++s) {
         StationTruth& st = r.stations[s];

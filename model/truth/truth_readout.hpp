@@ -21,12 +21,19 @@ namespace scopekin::model::truth {
 struct StationLayout {
     std::size_t stations = 12;
     double spacing_mm = 50.0;
-    std::vector<std::size_t> nodes;  ///< tip first
+    /// Tip first; fewer than `stations` when the scope is shorter than the stations' span (the
+    /// stations past its end are never inside and carry no force).
+    std::vector<std::size_t> nodes;
 };
-/// The layout of `stations` stations `spacing_mm` apart on this world's scope (model::station_nodes:
-/// throws ModelError when a station falls between nodes or off the scope).
+/// The layout of `stations` stations `spacing_mm` apart on this world's scope, exactly as the
+/// reduction places them (model::station_nodes: throws ModelError when a station falls between
+/// nodes or off the scope). The accuracy tests use this one.
 StationLayout station_layout(const World& world, std::size_t stations = 12,
                              double spacing_mm = 50.0);
+/// The same on any scope (truth.csv of any scenario): station j at the node nearest to
+/// j x spacing from the tip, and only the stations that fit on the scope.
+StationLayout nearest_station_layout(const World& world, std::size_t stations = 12,
+                                     double spacing_mm = 50.0);
 
 /// Where a point is along a colon centerline given by its current points and their arc lengths
 /// at rest: the closest point of the segments whose rest arc overlaps [from_mm, to_mm].

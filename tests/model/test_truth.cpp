@@ -400,16 +400,22 @@ TEST(TruthReader, StationsMatchTheProbeAndTheReductionsStationForces) {
     EXPECT_GT(largest_force, 0.1) << "the comparison must include loaded stations";
 }
 
-TEST(TruthReader, AStraightScopeInAStraightTubeIsAtItsDepth) {
+/// A straight scope of `length_mm` in 10 mm elements, `inserted_mm` of it in a straight, wide
+/// 600 mm tube (no gravity: it touches nothing).
+World straight_world(double length_mm, double inserted_mm) {
     const ColonTube tube = straight_tube(600.0, 20.0, ColonRegion::rectum, cf_q160l::kRadius_mm);
     WorldSettings settings;
     settings.gravity_mm_per_s2.setZero();
-    settings.initial_insertion_mm = 300.0;
+    settings.initial_insertion_mm = inserted_mm;
     ScopeSpec scope;
-    scope.length_mm = 600.0;
-    scope.elements = 60;
+    scope.length_mm = length_mm;
+    scope.elements = static_cast<std::size_t>(std::lround(length_mm / 10.0));
     scope.section = cf_q160l::section();
-    const World world(scope, tube, default_colon_properties(), settings);
+    return World(scope, tube, default_colon_properties(), settings);
+}
+
+TEST(TruthReader, AStraightScopeInAStraightTubeIsAtItsDepth) {
+    const World world = straight_world(600.0, 300.0);
     const TruthReader reader(world, station_layout(world, 4, 50.0), Eigen::Vector3d::Zero());
     const TruthReadout r = reader.read(world);
     EXPECT_NEAR(r.tip_path_mm, 300.0, 1e-9);
@@ -419,6 +425,25 @@ TEST(TruthReader, AStraightScopeInAStraightTubeIsAtItsDepth) {
     EXPECT_FALSE(r.has_wall_force);
     EXPECT_FALSE(r.scope_crosses);
     EXPECT_NEAR(r.bow_mm, 0.0, 1e-9);
+}
+
+TEST(TruthReader, AScopeShorterThanTheStationsSpanHasTheStationsThatFit) {
+    // 300 mm of scope in 30 elements: stations 0..6 (0 to 300 mm from the tip) fit, 7..11 do not.
+    // The reduction's layout refuses such a scope; truth.csv's takes the stations that fit.
+    const World world = straight_world(300.0, 280.0);
+    expect_model_error([&] { station_layout(world); }, "stations must fall on scope nodes");
+    const StationLayout layout = nearest_station_layout(world);
+    EXPECT_EQ(layout.nodes, (std::vector<std::size_t>{30, 25, 20, 15, 10, 5, 0}));
+    const TruthReader reader(world, layout, Eigen::Vector3d::Zero());
+    const TruthReadout r = reader.read(world);
+    ASSERT_EQ(r.stations.size(), 12U);
+    for (std::size_t s = 0; s < 12; ++s)
+        EXPECT_EQ(r.stations[s].inside, s <= 5) << "station " << s;  // 280 mm inserted
+    EXPECT_NEAR(r.tip_path_mm, 280.0, 1e-9);
+    StationLayout none;
+    none.stations = 0;
+    expect_model_error([&] { TruthReader(world, none, Eigen::Vector3d::Zero()); },
+                       "at least the tip's station");
 }
 
 }  // namespace
