@@ -65,36 +65,58 @@ PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
     return best;
 }
 
+bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler) {
+    const std::vector<Candidate>& library = candidate_library();
+    if (c >= library.size() || simpler >= library.size()) return false;
+    if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale")
+        return values.size() == 2 &&
+               std::abs(values[0] - values[1]) <= library[c].parameters[0].step;
+    return false;
+}
+
 const std::vector<Candidate>& candidate_library() {
     static const std::vector<Candidate> library = [] {
         std::vector<Candidate> c;
         c.push_back({"viscoadhesive_friction",
                      "every contact, growing with the sliding speed",
-                     {{"viscous_coefficient_s_per_mm", "s/mm", 0.0, 0.05, 0.0, 0.002}},
+                     {{"viscous_coefficient_s_per_mm",
+                       "s/mm",
+                       0.0,
+                       0.05,
+                       0.0,
+                       0.002,
+                       {0.0005, 0.002, 0.008, 0.032}}},
                      constant({{"max_friction_increase", 0.25}}),
                      plain_entry("viscoadhesive_friction", {"viscous_coefficient_s_per_mm"})});
         c.push_back({"mesenteric_retraction",
                      "scope nodes bowing the sigmoid out",
-                     {{"stiffness_N_per_mm2", "N/mm^2", 0.0, 0.1, 0.0, 0.002}},
+                     {{"stiffness_N_per_mm2",
+                       "N/mm^2",
+                       0.0,
+                       0.1,
+                       0.0,
+                       0.002,
+                       {0.0005, 0.002, 0.008, 0.032}}},
                      constant({{"exponent", 1.0}, {"reference_excess_mm", 10.0}}),
                      plain_entry("mesenteric_retraction", {"stiffness_N_per_mm2"})});
         c.push_back(
             {"ei_profile",
              "the scope's bending stiffness along its length",
-             {{"tip_factor", "1", 0.3, 2.0, 1.0, 0.1}, {"handle_factor", "1", 0.3, 2.0, 1.0, 0.1}},
+             {{"tip_factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}},
+              {"handle_factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}}},
              constant({{"bending_section_length_mm", 0.0}, {"bending_section_factor", 1.0}}),
              plain_entry("ei_profile", {"tip_factor", "handle_factor"})});
         c.push_back({"ei_scale",
                      "the scope's bending stiffness, uniformly",
-                     {{"factor", "1", 0.3, 2.0, 1.0, 0.1}},
+                     {{"factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}}},
                      constant(nlohmann::json::object()),
                      plain_entry("ei_scale", {"factor"})});
         c.push_back({"sigmoid_mobility",
                      "scope nodes in the sigmoid, periodically",
-                     {{"amplitude_cos_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002},
-                      {"amplitude_sin_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002},
-                      {"direction_polar_rad", "rad", 0.0, M_PI, M_PI / 2.0, 0.05},
-                      {"direction_azimuth_rad", "rad", -M_PI, M_PI, M_PI / 2.0, 0.05}},
+                     {{"amplitude_cos_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002, {}},
+                      {"amplitude_sin_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002, {}},
+                      {"direction_polar_rad", "rad", 0.0, M_PI, M_PI / 2.0, 0.05, {}},
+                      {"direction_azimuth_rad", "rad", -M_PI, M_PI, M_PI / 2.0, 0.05, {}}},
                      [](const MeasuredRecording& data, const ModelPrediction& baseline) {
                          const PeriodicResidual p =
                              strongest_periodic_residual(data, baseline, estimate_noise(data));
@@ -110,11 +132,12 @@ const std::vector<Candidate>& candidate_library() {
                                            std::sin(v[2]) * std::sin(v[3]), std::cos(v[2])};
                          return e;
                      }});
-        c.push_back({"tissue_stiffening",
-                     "the colon wall at every contact, stiffening with the force",
-                     {{"stiffening_per_N", "1/N", 0.0, 20.0, 0.0, 0.3}},
-                     constant(nlohmann::json::object()),
-                     plain_entry("tissue_stiffening", {"stiffening_per_N"})});
+        c.push_back(
+            {"tissue_stiffening",
+             "the colon wall at every contact, stiffening with the force",
+             {{"stiffening_per_N", "1/N", 0.0, 20.0, 0.0, 0.3, {0.075, 0.3, 1.2, 4.8, 19.2}}},
+             constant(nlohmann::json::object()),
+             plain_entry("tissue_stiffening", {"stiffening_per_N"})});
         return c;
     }();
     return library;

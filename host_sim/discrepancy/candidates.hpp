@@ -29,6 +29,9 @@ struct FittedParameter {
     double lo = 0, hi = 0;
     double neutral = 0;  ///< where the effect vanishes (the fit starts there)
     double step = 0;     ///< finite-difference step
+    /// The screening's coarse grid over the range (besides `neutral`): geometric, as the effects
+    /// act by scale. Empty: screened by other means (sigmoid_mobility, linear in its amplitudes).
+    std::vector<double> screen;
 };
 
 struct Candidate {
@@ -44,6 +47,10 @@ struct Candidate {
 
 /// The six effects of the host simulator's library, in EFFECTS.md order.
 const std::vector<Candidate>& candidate_library();
+
+/// Nested effects: whether candidate `c` at fitted `values` is candidate `simpler` (ei_profile
+/// with its tip and handle factors equal within their finite-difference step, 0.1, is ei_scale).
+bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler);
 
 /// The strongest periodic component of the baseline's residuals (every assessed output, in units
 /// of its noise): frequency [Hz] in 0.05-2 Hz, and the principal direction of the position

@@ -157,6 +157,58 @@ std::vector<std::string> names_of(const EffectSetFit& fit) {
     return names;
 }
 
+std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params) {
+    std::vector<std::vector<double>> axes;
+    for (const FittedParameter& p : params) {
+        if (p.screen.empty()) return {};
+        std::vector<double> axis{p.neutral};
+        for (double v : p.screen)
+            if (v >= p.lo && v <= p.hi && v != p.neutral) axis.push_back(v);
+        axes.push_back(std::move(axis));
+    }
+    if (axes.empty()) return {};
+    // Odometer order over the axes, each starting at its neutral value: the all-neutral point first.
+    std::vector<std::vector<double>> points;
+    std::vector<std::size_t> at(axes.size(), 0);
+    for (;;) {
+        std::vector<double> x;
+        for (std::size_t j = 0; j < axes.size(); ++j)
+            x.push_back(axes[j][at[j]]);
+        points.push_back(std::move(x));
+        std::size_t j = 0;
+        while (j < axes.size() && ++at[j] == axes[j].size())
+            at[j++] = 0;
+        if (j == axes.size()) break;
+    }
+    return points;
+}
+
+GridScreen summarise_grid(const std::vector<FittedParameter>& params,
+                          std::vector<std::vector<double>> points, std::vector<double> costs) {
+    GridScreen g;
+    g.points = std::move(points);
+    g.costs = std::move(costs);
+    g.costs.resize(g.points.size(), std::numeric_limits<double>::infinity());
+    for (std::size_t k = 1; k < g.points.size(); ++k)
+        if (g.costs[k] < g.costs[g.best]) g.best = k;
+    g.profile.resize(params.size());
+    for (std::size_t j = 0; j < params.size(); ++j) {
+        std::vector<std::pair<double, double>>& prof = g.profile[j];
+        for (std::size_t k = 0; k < g.points.size(); ++k) {
+            const double v = g.points[k][j];
+            auto it =
+                std::find_if(prof.begin(), prof.end(),
+                             [v](const std::pair<double, double>& e) { return e.first == v; });
+            if (it == prof.end())
+                prof.emplace_back(v, g.costs[k]);
+            else
+                it->second = std::min(it->second, g.costs[k]);
+        }
+        std::sort(prof.begin(), prof.end());
+    }
+    return g;
+}
+
 EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const DiscrepancyContext& context,
                             const std::vector<double>* start,
                             const std::vector<nlohmann::json>* held, int max_iterations) {

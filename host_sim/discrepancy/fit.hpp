@@ -9,7 +9,9 @@
 // tau = (1 + rho) / (1 - rho) for the lag-1 autocorrelation rho of the residual: neighbouring
 // samples are not independent, and tau counts how many fewer independent ones there are.
 // BIC = N ln(RSS' / N) + P ln(N) on the training samples (N components, P parameters).
+#include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -54,5 +56,23 @@ double bic_of(const DiscrepancyContext& context, const ModelPrediction& p, std::
 
 /// The candidates of a fit by name.
 std::vector<std::string> names_of(const EffectSetFit& fit);
+
+/// The screening's search over a candidate's range (README step 4): the tensor grid of its
+/// parameters' `screen` values, each axis with its neutral value too, and what it found. No
+/// derivatives: a training cost that steps with event timing (a stick-release that comes a
+/// little earlier or later) cannot send it the wrong way, as it can a finite-difference step.
+struct GridScreen {
+    std::vector<std::vector<double>> points;  ///< every grid point, the all-neutral one first
+    std::vector<double> costs;                ///< the cost at each (infinity: its run failed)
+    std::size_t best = 0;                     ///< the lowest cost (the earliest of equals)
+    /// Per parameter: each of its axis values with the lowest cost over the other parameters
+    /// (the profile of the cost along the parameter's range).
+    std::vector<std::vector<std::pair<double, double>>> profile;
+};
+/// The grid's points, the all-neutral one first; none when a parameter has no `screen`.
+std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params);
+/// The best point and the profiles, from the costs of screen_grid(params)'s points in order.
+GridScreen summarise_grid(const std::vector<FittedParameter>& params,
+                          std::vector<std::vector<double>> points, std::vector<double> costs);
 
 }  // namespace scopekin::discrepancy

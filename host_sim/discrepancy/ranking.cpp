@@ -28,6 +28,19 @@ void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>
             share_of(context, fits[k]) >= share_of(context, fits.front()) - kTieShare &&
             fits[k].bic < fits[lead].bic)
             lead = k;
+    // A nested effect at the point where it is the simpler one yields to it.
+    for (bool yielded = true; yielded;) {
+        yielded = false;
+        if (fits[lead].candidates.size() != 1) break;
+        for (std::size_t k = 0; k < fits.size(); ++k)
+            if (k != lead && fits[k].ok && fits[k].candidates.size() == 1 &&
+                share_of(context, fits[k]) >= share_of(context, fits.front()) - kTieShare &&
+                reduces_to(fits[lead].candidates[0], fits[lead].values, fits[k].candidates[0])) {
+                lead = k;
+                yielded = true;
+                break;
+            }
+    }
     std::rotate(fits.begin(), fits.begin() + static_cast<std::ptrdiff_t>(lead),
                 fits.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
 }

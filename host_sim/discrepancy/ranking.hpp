@@ -18,7 +18,11 @@ double share_of(const DiscrepancyContext& context, const EffectSetFit& fit);
 /// Working fits first, then by held-out cost.
 bool by_held_out(const EffectSetFit& a, const EffectSetFit& b);
 /// After sorting by held-out cost: the lowest BIC among those within kTieShare of the best leads
-/// (of two effects that explain the same, the one with fewer parameters).
+/// (of two effects that explain the same, the one with fewer parameters). A single effect that
+/// reduces at its fit to a simpler one also within kTieShare (reduces_to: ei_profile with equal
+/// factors is ei_scale) yields to it whatever the BIC: the held-out data do not ask for the
+/// extra parameter, and the BIC's sample count overstates the evidence of autocorrelated
+/// residuals.
 void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits);
 
 }  // namespace scopekin::discrepancy

@@ -286,6 +286,7 @@ Json build_report(const DiscrepancyContext& context, const Findings& findings,
                       "the drive's span in 10 equal blocks; blocks 1, 4, 7 held out (residuals are "
                       "autocorrelated)"}};
     r["candidates"] = candidates_json(context, findings);
+    r["screening"] = findings.screening;
     r["pair_test"] = findings.pair_test;
     r["baseline"] = {{"held_out_cost", context.cost_before},
                      {"noise_floor_cost", context.noise_floor},

@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <utility>
 
 #include "host_sim/discrepancy/stages.hpp"
@@ -166,32 +168,164 @@ Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumn
     return trials;
 }
 
+/// Every candidate's grid (screen_grid) but its all-neutral point (the model as given), as
+/// truth_effects lists for training runs, with the candidate and point each is for.
+struct GridRuns {
+    std::vector<std::vector<std::vector<double>>> points;  // per candidate; empty: no grid
+    std::vector<nlohmann::json> lists;
+    std::vector<std::pair<std::size_t, std::size_t>> of;  // (candidate, point)
+};
+
+GridRuns grid_runs(const std::vector<EffectSetFit>& fits) {
+    const std::vector<Candidate>& library = candidate_library();
+    GridRuns g;
+    g.points.resize(library.size());
+    for (std::size_t c = 0; c < library.size(); ++c) {
+        g.points[c] = screen_grid(library[c].parameters);
+        for (std::size_t k = 1; k < g.points[c].size(); ++k) {
+            g.lists.push_back(
+                nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
+            g.of.emplace_back(c, k);
+        }
+    }
+    return g;
+}
+
+/// A candidate's screening in report.json: the Gauss-Newton step, the grid and its profiles,
+/// and the start handed on.
+nlohmann::ordered_json screening_json(const Candidate& c, const std::vector<double>& step,
+                                      double step_cost, const GridScreen& grid, bool from_grid,
+                                      const std::vector<double>& start) {
+    using Json = nlohmann::ordered_json;
+    auto cost = [](double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); };
+    Json keys = Json::array();
+    for (const FittedParameter& p : c.parameters)
+        keys.push_back(p.key);
+    Json out = {{"effect", c.name},
+                {"parameters", keys},
+                {"gauss_newton_step", {{"values", step}, {"training_cost", cost(step_cost)}}}};
+    if (grid.points.empty()) {
+        out["grid"] = nullptr;
+    } else {
+        Json points = Json::array();
+        for (std::size_t k = 0; k < grid.points.size(); ++k)
+            points.push_back({{"values", grid.points[k]}, {"training_cost", cost(grid.costs[k])}});
+        Json profiles = Json::array();
+        for (std::size_t j = 0; j < grid.profile.size(); ++j) {
+            Json values = Json::array(), costs = Json::array();
+            for (const auto& [v, c_v] : grid.profile[j]) {
+                values.push_back(v);
+                costs.push_back(cost(c_v));
+            }
+            profiles.push_back({{"parameter", c.parameters[j].key},
+                                {"values", values},
+                                {"lowest_training_cost", costs}});
+        }
+        out["grid"] = {{"points", points}, {"profile", profiles}};
+    }
+    out["start"] = from_grid ? "grid" : "gauss_newton_step";
+    out["start_values"] = start;
+    return out;
+}
+
 }  // namespace
 
-std::vector<EffectSetFit> screen_candidates(const DiscrepancyContext& context) {
+Screening screen_candidates(const DiscrepancyContext& context) {
+    using Json = nlohmann::ordered_json;
+    const std::vector<Candidate>& library = candidate_library();
     const Eigen::VectorXd r0 = context.residuals(context.baseline, SampleSet::fit_training);
-    std::vector<EffectSetFit> fits(candidate_library().size());
+    Screening out;
+    std::vector<EffectSetFit>& fits = out.fits;
+    fits.resize(library.size());
     const NeutralColumns n = neutral_columns(context, fits);
     const std::vector<ModelPrediction> columns =
         context.evaluator.run_all(n.lists, RunScope::fit_training);
-    const Trials trial_lists = gauss_newton_steps(context, n, columns, r0, fits);
-    const std::vector<ModelPrediction> trials =
-        context.evaluator.run_all(trial_lists.lists, RunScope::fit_all);
-    for (std::size_t k = 0; k < trials.size(); ++k) {
-        EffectSetFit& f = fits[trial_lists.of[k]];
+    const Trials steps = gauss_newton_steps(context, n, columns, r0, fits);
+    const GridRuns grid = grid_runs(fits);
+    // One batch: the steps over every window (they are scored as they are), the grid over the
+    // training ones (it only picks a start).
+    std::vector<std::pair<nlohmann::json, RunScope>> requests;
+    for (const nlohmann::json& l : steps.lists)
+        requests.emplace_back(l, RunScope::fit_all);
+    for (const nlohmann::json& l : grid.lists)
+        requests.emplace_back(l, RunScope::fit_training);
+    std::vector<ModelPrediction> runs = context.evaluator.run_all(requests);
+    auto training_cost = [&](const ModelPrediction& p) {
+        return p.ok ? context.residuals(p, SampleSet::fit_training).squaredNorm()
+                    : std::numeric_limits<double>::infinity();
+    };
+
+    // Each candidate's start: its Gauss-Newton step, or the grid's best point when that costs less.
+    std::vector<std::optional<std::size_t>> step_run(library.size());
+    for (std::size_t k = 0; k < steps.of.size(); ++k)
+        step_run[steps.of[k]] = k;
+    std::vector<std::vector<double>> grid_costs(library.size());
+    std::vector<std::vector<std::size_t>> grid_run(library.size());
+    for (std::size_t c = 0; c < library.size(); ++c) {
+        grid_costs[c].assign(grid.points[c].size(), std::numeric_limits<double>::infinity());
+        grid_run[c].assign(grid.points[c].size(), 0);
+        if (!grid.points[c].empty()) grid_costs[c][0] = r0.squaredNorm();
+    }
+    for (std::size_t k = 0; k < grid.of.size(); ++k) {
+        const auto [c, point] = grid.of[k];
+        const std::size_t run = steps.lists.size() + k;
+        grid_costs[c][point] = training_cost(runs[run]);
+        grid_run[c][point] = run;
+    }
+    Json report = Json::array();
+    std::vector<std::size_t> needs_held_out;  // candidates started from a grid point, on windows
+    for (std::size_t c = 0; c < library.size(); ++c) {
+        EffectSetFit& f = fits[c];
+        const std::vector<double> step = f.values;
+        const double step_cost = step_run[c] ? training_cost(runs[*step_run[c]])
+                                             : std::numeric_limits<double>::infinity();
+        const GridScreen g = summarise_grid(library[c].parameters, grid.points[c], grid_costs[c]);
+        const bool from_grid = !g.points.empty() && g.best != 0 && g.costs[g.best] < step_cost;
         f.iterations = 1;
-        f.effects = trial_lists.lists[k];
-        f.prediction = trials[k];
-        f.ok = trials[k].ok;
-        if (!f.ok) {
-            f.failure = trials[k].failure;
+        if (from_grid) {
+            f.values = g.points[g.best];
+            f.effects = grid.lists[grid_run[c][g.best] - steps.lists.size()];
+            f.prediction = std::move(runs[grid_run[c][g.best]]);
+            if (context.evaluator.windowed()) needs_held_out.push_back(c);
+        } else if (step_run[c]) {
+            f.effects = steps.lists[*step_run[c]];
+            f.prediction = std::move(runs[*step_run[c]]);
+        }
+        f.ok = f.prediction.ok && (from_grid || step_run[c]);
+        if (f.ok)
+            f.failure.clear();
+        else if (f.failure.empty())
+            f.failure = f.prediction.failure;
+        report.push_back(screening_json(library[c], step, step_cost, g, from_grid, f.values));
+    }
+    // The grid ran on the training windows only: the held-out windows at the chosen points.
+    std::vector<nlohmann::json> held_out_lists;
+    for (std::size_t c : needs_held_out)
+        held_out_lists.push_back(fits[c].effects);
+    const std::vector<ModelPrediction> held_out =
+        context.evaluator.run_all(held_out_lists, RunScope::fit_held_out);
+    for (std::size_t k = 0; k < needs_held_out.size(); ++k) {
+        EffectSetFit& f = fits[needs_held_out[k]];
+        if (!held_out[k].ok) {
+            f.ok = false;
+            f.failure = held_out[k].failure;
             continue;
         }
+        merge_outputs(held_out[k], f.prediction);
+    }
+    for (EffectSetFit& f : fits) {
+        if (!f.ok) continue;
         f.training_cost = context.residuals(f.prediction, SampleSet::fit_training).squaredNorm();
         f.held_out_cost = context.residuals(f.prediction, SampleSet::fit_held_out).squaredNorm();
         f.bic = bic_of(context, f.prediction, f.values.size());
     }
-    return fits;
+    out.report = {{"rule",
+                   "every candidate from the model as given: one Gauss-Newton step (a shared "
+                   "forward-difference Jacobian), and a coarse grid over each parameter's range "
+                   "(training data only); the lower training cost is the start refined"},
+                  {"baseline_training_cost", r0.squaredNorm()},
+                  {"candidates", report}};
+    return out;
 }
 
 }  // namespace scopekin::discrepancy

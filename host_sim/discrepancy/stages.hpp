@@ -3,7 +3,8 @@
 // function in its own file, in the order workflow.cpp calls them. Each works from the context
 // (context.hpp); what one finds, the next takes, and the report reads (Findings).
 //   stage_significance.cpp  is any output's held-out error beyond its noise? If not: verdict none
-//   stage_screening.cpp     one Gauss-Newton step per candidate, from a shared Jacobian
+//   stage_screening.cpp     per candidate: a coarse grid over its range, and one Gauss-Newton
+//                           step from a shared Jacobian; the better is its start
 //   stage_refinement.cpp    Levenberg-Marquardt on the best (and on a runner-up that comes close)
 //   stage_pairs.cpp         pairs or not (the score test), then the two best pairs side by side
 //   stage_verdict.cpp       named or unexplained; the named effects' uncertainty (and, fitted on
@@ -40,9 +41,16 @@ struct Verdict {
     nlohmann::ordered_json confirmation;  ///< fitted on windows: the named effects' full run
 };
 
+/// What the screening found: one fit per candidate, and how it got there.
+struct Screening {
+    std::vector<EffectSetFit> fits;  ///< library order, no SDs
+    nlohmann::ordered_json report;   ///< report.json "screening": the starts tried, the profiles
+};
+
 /// What the stages found.
 struct Findings {
     Significance significance;
+    nlohmann::ordered_json screening;      ///< the screening's starts and profiles
     std::vector<EffectSetFit> candidates;  ///< every fit, best first (held-out cost)
     nlohmann::ordered_json pair_test;      ///< the score test before pairs (when it ran)
     Verdict verdict;
@@ -53,8 +61,10 @@ Significance assess_significance(const DiscrepancyContext& context);
 
 /// Screening: every candidate of the library gets one Gauss-Newton step from its neutral values,
 /// with the Jacobian of all their parameters computed at the model as given (one run per
-/// parameter, in parallel), and one run at the step. One fit per candidate, library order, no SDs.
-std::vector<EffectSetFit> screen_candidates(const DiscrepancyContext& context);
+/// parameter, in parallel), and one run at the step; and, beside it, a coarse grid over its
+/// parameters' ranges (screen_grid, training data only). The lower training cost of the step and
+/// the grid's best point is the candidate's screened fit (the refinement's start).
+Screening screen_candidates(const DiscrepancyContext& context);
 
 /// Refinement: the best screened candidate refined by Levenberg-Marquardt; the next one while the
 /// refined ones explain too little, or when its screening step came close. Returns every fit,

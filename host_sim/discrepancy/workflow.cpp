@@ -28,7 +28,9 @@ WorkflowResult run_discrepancy(const MeasuredRecording& recording, const Workflo
     // 4. Naming: screening, refinement, pairs, verdict.
     if (findings.significance.any) {
         stages.start("screening the candidates", 1.0 / kProgressSteps);
-        const std::vector<EffectSetFit> screened = screen_candidates(context);
+        Screening screening = screen_candidates(context);
+        const std::vector<EffectSetFit>& screened = screening.fits;
+        findings.screening = std::move(screening.report);
         findings.candidates = refine_candidates(context, screened, stages);
         PairsOutcome pairs = try_pairs(context, screened, findings.candidates, stages);
         findings.pair_test = std::move(pairs.pair_test);

@@ -1,0 +1,118 @@
+// The discrepancy workflow's search for an effect (host_sim/discrepancy/): the screening's coarse
+// grid over each parameter's documented range (fit.hpp: screen_grid, summarise_grid), which finds
+// the basin of a cost that steps where a finite-difference step from the neutral value goes the
+// wrong way; and which nested effect reduces to which (candidates.hpp: reduces_to). The
+// objectives are made by hand with a known minimum; no model runs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "host_sim/discrepancy/fit.hpp"
+
+namespace scopekin::discrepancy {
+namespace {
+
+/// A stiffness factor as the library documents one: range 0.3-2, neutral 1, difference step 0.1.
+FittedParameter factor(const char* key) {
+    return {key, "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}};
+}
+
+/// Costs a cost function at every point of the grid, in the grid's order.
+template <class F>
+GridScreen screen(const std::vector<FittedParameter>& params, F cost) {
+    const std::vector<std::vector<double>> points = screen_grid(params);
+    std::vector<double> costs;
+    for (const std::vector<double>& x : points)
+        costs.push_back(cost(x));
+    return summarise_grid(params, points, costs);
+}
+
+// A cost that steps (quantised to 0.02) with its basin at 0.7, and a step of +0.2 in a band
+// around the neutral value (an event that flips with timing): the forward difference at the
+// neutral value points to the stiff side, away from the basin; the grid finds the basin.
+TEST(DiscrepancyGridScreen, FindsTheBasinWhereAFiniteDifferenceGoesTheWrongWay) {
+    const std::vector<FittedParameter> params{factor("factor")};
+    auto cost = [](const std::vector<double>& x) {
+        const double smooth = std::floor((x[0] - 0.7) * (x[0] - 0.7) / 0.02) * 0.02;
+        return smooth + (std::abs(x[0] - 1.0) < 0.05 ? 0.2 : 0.0);
+    };
+    // The wrong way: a finite-difference step of 0.1 from neutral sees the cost fall upwards.
+    const double slope = (cost({1.1}) - cost({1.0})) / 0.1;
+    ASSERT_LT(slope, 0.0);
+
+    const GridScreen g = screen(params, cost);
+    ASSERT_EQ(g.points.size(), 5u);
+    EXPECT_EQ(g.points.front(), std::vector<double>{1.0});  // the model as given first
+    EXPECT_EQ(g.points[g.best], std::vector<double>{0.7});
+    EXPECT_EQ(g.costs[g.best], 0.0);
+    // The profile: the axis in order, each value with its cost.
+    ASSERT_EQ(g.profile.size(), 1u);
+    const std::vector<double> axis{0.5, 0.7, 1.0, 1.4, 2.0};
+    ASSERT_EQ(g.profile[0].size(), axis.size());
+    for (std::size_t k = 0; k < axis.size(); ++k) {
+        EXPECT_EQ(g.profile[0][k].first, axis[k]);
+        EXPECT_EQ(g.profile[0][k].second, cost({axis[k]}));
+    }
+}
+
+// Two parameters (a softer tip, a stiffer handle: basin at (0.7, 1.3)): the tensor grid of both
+// axes, the best point the one nearest the basin, and each parameter's profile the lowest cost
+// over the other.
+TEST(DiscrepancyGridScreen, TwoParametersTheTensorGridAndEachProfile) {
+    const std::vector<FittedParameter> params{factor("tip_factor"), factor("handle_factor")};
+    auto cost = [](const std::vector<double>& x) {
+        return (x[0] - 0.7) * (x[0] - 0.7) + (x[1] - 1.3) * (x[1] - 1.3);
+    };
+    const GridScreen g = screen(params, cost);
+    ASSERT_EQ(g.points.size(), 25u);
+    EXPECT_EQ(g.points.front(), (std::vector<double>{1.0, 1.0}));
+    ASSERT_EQ(g.points[g.best].size(), 2u);
+    EXPECT_EQ(g.points[g.best][0], 0.7);
+    EXPECT_EQ(g.points[g.best][1], 1.4);
+    ASSERT_EQ(g.profile.size(), 2u);
+    // Along the tip factor: its own term plus the handle's best, (1.4 - 1.3)^2.
+    for (const auto& [tip, c] : g.profile[0])
+        EXPECT_NEAR(c, (tip - 0.7) * (tip - 0.7) + 0.01, 1e-12) << tip;
+    // Along the handle factor: its own term plus the tip's best, 0 at 0.7.
+    for (const auto& [handle, c] : g.profile[1])
+        EXPECT_NEAR(c, (handle - 1.3) * (handle - 1.3), 1e-12) << handle;
+}
+
+// A point whose run failed (infinite cost) is never the start; values outside the bounds are not
+// tried; a parameter without a grid (screened otherwise) gives no grid at all.
+TEST(DiscrepancyGridScreen, FailedRunsOutOfBoundsValuesAndNoGrid) {
+    FittedParameter p{"stiffening_per_N", "1/N", 0.0, 5.0, 0.0, 0.3, {0.075, 0.3, 1.2, 4.8, 19.2}};
+    const std::vector<std::vector<double>> points = screen_grid({p});
+    ASSERT_EQ(points.size(), 5u);  // 0 (neutral), 0.075, 0.3, 1.2, 4.8; not 19.2
+    EXPECT_EQ(points.back(), std::vector<double>{4.8});
+    const double inf = std::numeric_limits<double>::infinity();
+    const GridScreen g = summarise_grid({p}, points, {1.0, 0.8, inf, 0.5, 0.9});
+    EXPECT_EQ(g.points[g.best], std::vector<double>{1.2});
+    const GridScreen all_failed = summarise_grid({p}, points, {1.0, inf, inf, inf, inf});
+    EXPECT_EQ(all_failed.best, 0u);  // the model as given stays the start
+
+    const FittedParameter free_amplitude{"amplitude", "N/mm", -0.1, 0.1, 0.0, 0.002, {}};
+    EXPECT_TRUE(screen_grid({p, free_amplitude}).empty());
+}
+
+// Nested effects: ei_profile with equal tip and handle factors is ei_scale (EFFECTS.md), so a fit
+// of it with factors equal within their difference step reduces to ei_scale; unequal ones, or the
+// other way round, do not.
+TEST(DiscrepancyNestedEffects, EiProfileWithEqualFactorsIsEiScale) {
+    std::size_t profile = 0, scale = 0;
+    for (std::size_t c = 0; c < candidate_library().size(); ++c) {
+        if (candidate_library()[c].name == "ei_profile") profile = c;
+        if (candidate_library()[c].name == "ei_scale") scale = c;
+    }
+    ASSERT_NE(profile, scale);
+    EXPECT_TRUE(reduces_to(profile, {1.122, 1.113}, scale));
+    EXPECT_TRUE(reduces_to(profile, {0.85, 0.85}, scale));
+    EXPECT_FALSE(reduces_to(profile, {0.7, 1.2}, scale));
+    EXPECT_FALSE(reduces_to(scale, {1.12}, profile));
+    EXPECT_FALSE(reduces_to(profile, {1.0, 1.0}, profile));
+}
+
+}  // namespace
+}  // namespace scopekin::discrepancy
