@@ -73,6 +73,12 @@ std::string fmt(double v, const char* format = "%.3g") {
     return buffer;
 }
 
+/// A share as a percentage; "< 0.1 %" for a share that is not 0 but rounds to it.
+std::string percent(double share) {
+    if (std::isfinite(share) && share > 0 && share < 0.0005) return "< 0.1 %";
+    return fmt(100.0 * share, "%.1f") + " %";
+}
+
 std::string fmt_json(const Json& j, const char* key, const char* format = "%.3g") {
     return fmt(get(j, key), format);
 }
@@ -421,7 +427,7 @@ std::vector<std::string> scorecard_csv_rows(const Json& c) {
             const std::size_t columns =
                 3 + 8 * std::size(kAlarms) + fault_flag_names().size();  // left empty
             row += std::string(columns, ',');
-            rows.push_back(row + procedure);
+            rows.push_back(row + "," + procedure);
             continue;
         }
         const Json& s = c["estimators"][e.name];
@@ -526,9 +532,8 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
         md << "| periods with the fault flag `" << flag << "` (pooled) |";
         for (const Json& e : estimators)
             md << " "
-               << (e["fault_share"].is_object()
-                       ? fmt(100.0 * get(e["fault_share"][flag], "pooled"), "%.1f") + " %"
-                       : std::string("n/a"))
+               << (e["fault_share"].is_object() ? percent(get(e["fault_share"][flag], "pooled"))
+                                                : std::string("n/a"))
                << " |";
         md << "\n";
     }

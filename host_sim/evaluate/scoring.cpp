@@ -10,6 +10,12 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// Times are whole microseconds (the periods' release times): a difference of two is rounded to
+/// the microsecond, so a lingering alarm that clears at the episode's end counts 0, not 3e-15.
+double microseconds(double seconds) {
+    return std::round(seconds * 1e6) / 1e6;
+}
+
 void check_times(const std::vector<double>& time_s) {
     for (std::size_t k = 0; k < time_s.size(); ++k) {
         if (!std::isfinite(time_s[k]))
@@ -133,7 +139,7 @@ AlarmScore score_alarm(const std::vector<double>& time_s, const std::vector<std:
         }
         used[*hit] = true;
         (timely ? s.detected : s.late) += 1;
-        s.latency_s.push_back(std::max(0.0, rises[*hit] - e.onset_s));
+        s.latency_s.push_back(microseconds(std::max(0.0, rises[*hit] - e.onset_s)));
         if (e.end_s) {
             double linger = run_end - *e.end_s;
             for (std::size_t k = 0; k < time_s.size(); ++k)
@@ -141,7 +147,7 @@ AlarmScore score_alarm(const std::vector<double>& time_s, const std::vector<std:
                     linger = time_s[k] - *e.end_s;
                     break;
                 }
-            s.linger_s.push_back(std::max(0.0, linger));
+            s.linger_s.push_back(microseconds(std::max(0.0, linger)));
         }
     }
     for (std::size_t r = 0; r < rises.size(); ++r)
