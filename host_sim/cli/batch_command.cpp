@@ -17,10 +17,13 @@
 #include "host_sim/cli/run_command.hpp"
 #include "host_sim/cli/shard.hpp"
 #include "host_sim/cli/simulate_command.hpp"
+#include "host_sim/recording/recording_format.hpp"
 #include "model/model_error.hpp"
 
 namespace scopekin::cli {
 namespace {
+
+using recording::csv_cell;
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
@@ -61,16 +64,6 @@ std::string folder_name(const std::string& entry) {
     std::snprintf(hash, sizeof hash, "%08llx",
                   static_cast<unsigned long long>(fnv1a(entry) & 0xffffffffULL));
     return stem + "-" + hash;
-}
-
-std::string csv_cell(std::string text) {
-    if (text.find_first_of(",\"\n") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) {
-        if (c == '"') quoted += '"';
-        quoted += c == '\n' ? ' ' : c;
-    }
-    return quoted + "\"";
 }
 
 std::string number(const Json& j, const char* key) {

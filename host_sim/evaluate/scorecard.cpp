@@ -8,9 +8,12 @@
 #include <sstream>
 
 #include "host_sim/evaluate/scoring.hpp"
+#include "host_sim/recording/recording_format.hpp"
 
 namespace scopekin::evaluate {
 namespace {
+
+using recording::csv_cell;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -81,16 +84,6 @@ std::string percent(double share) {
 
 std::string fmt_json(const Json& j, const char* key, const char* format = "%.3g") {
     return fmt(get(j, key), format);
-}
-
-std::string csv_cell(const std::string& text) {
-    if (text.find_first_of(",\"\n") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) {
-        if (c == '"') quoted += '"';
-        quoted += c == '\n' ? ' ' : c;
-    }
-    return quoted + "\"";
 }
 
 std::string csv_number(double v) {
@@ -467,7 +460,8 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
     }
     md << "; " << fmt(get(overall, "simulated_s"), "%.1f") << " s simulated in "
        << fmt(get(overall, "simulation_wall_s"), "%.1f")
-       << " s of simulation wall time. Distributions over the cases are given as median / 90th "
+       << " s of the cases' own wall times (summed). Distributions over the cases are given as "
+          "median / 90th "
           "percentile / worst; detections, misses and false alarms are pooled over the cases. "
           "Rules: host_sim/evaluate/README.md.\n\n";
     const Json& estimators = overall["estimators"];
