@@ -21,6 +21,7 @@
 
 #include "host_sim/evaluate/case_run.hpp"
 #include "host_sim/evaluate/scoring.hpp"
+#include "model/truth/truth_definitions.hpp"
 
 namespace scopekin::evaluate {
 
@@ -32,8 +33,8 @@ inline constexpr double kForceWindow_s = 0.05;
 inline constexpr double kRateWindow_s = 0.25;
 /// Advancing: the insertion grew by at least kAdvanceMin_mm over kAdvanceWindow_s (the truth's
 /// pace rule, model/truth/README.md).
-inline constexpr double kAdvanceWindow_s = 0.5;
-inline constexpr double kAdvanceMin_mm = 1.0;
+inline constexpr double kAdvanceWindow_s = model::truth::kPaceWindow_s;
+inline constexpr double kAdvanceMin_mm = model::truth::kPaceMinHandle_mm;
 /// Hysteresis: an alarm clears below this fraction of its thresholds (the firmware's contact
 /// band: 0.9).
 inline constexpr double kClearFraction = 0.9;
