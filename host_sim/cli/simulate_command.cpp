@@ -65,10 +65,21 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
         s["duration_s"].get<double>(), s["wall_time_s"].get<double>(),
         s["real_time_factor"].get<double>(), s["peak_handle_force_N"]["true"].get<double>(),
         s["alarms"].size());
+    const Json& procedure = s["procedure"];
+    if (procedure["kind"] == "physician")
+        std::printf(
+            "physician %s (seed %s): %s, %zu loop reduction(s)%s\n",
+            procedure["style"].get<std::string>().c_str(), procedure["seed"].dump().c_str(),
+            procedure["end_reason"].get<std::string>().c_str(),
+            procedure["loop_reductions"].get<std::size_t>(),
+            procedure["cecum_reached"].get<bool>()
+                ? (", cecum at " + num(procedure["cecum_time_s"].get<double>()) + " s with " +
+                   num(procedure["insertion_at_cecum_mm"].get<double>()) + " mm inserted")
+                      .c_str()
+                : "");
     std::printf(
-        "wrote recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, summary.json "
-        "into "
-        "%s\n",
+        "wrote recording.csv, world.csv, firmware.csv, truth.csv, procedure.csv, snapshots.json, "
+        "summary.json into %s\n",
         dir.string().c_str());
     return 0;
 }

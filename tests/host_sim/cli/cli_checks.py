@@ -898,7 +898,73 @@ def check_evaluate_physician_manifests():
         expect(p.returncode == 0, f"{n}.json is accepted: {p.stderr[-400:]}")
 
 
-CHECKS = {"patients": check_patients, "replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
+def check_physician():
+    # A physician instead of a procedure: the bench operator pushes a 400 mm scope through a
+    # 200 mm straight tube and stops within 30 mm of its end; simulate writes procedure.csv (one
+    # row per world.csv row, the same time_s) and summary.json "procedure" with the documented
+    # keys. A scripted run gets {"kind": "scripted", ...}. Bad physician keys: exit 2 naming them.
+    d = fresh("physician")
+    os.makedirs(d)
+    scenario = os.path.join(d, "s.json")
+    base = {"colon": {"bundled": "straight_tube", "length_mm": 200, "inner_radius_mm": 15, "region": "rectum"},
+            "scope": {"model": "cf_q160l", "length_mm": 400, "elements": 40}, "initial_insertion_mm": 20}
+    with open(scenario, "w") as f:
+        json.dump(dict(base, physician={"style": "bench_operator", "seed": 3, "max_duration_s": 60}), f)
+    out = os.path.join(d, "run")
+    p = run("simulate", scenario, "--out", out, "--quiet")
+    expect("physician bench_operator (seed 3): cecum_reached" in p.stdout, f"simulate says how it went: {p.stdout}")
+    s = json.load(open(os.path.join(out, "summary.json")))
+    proc = s.get("procedure", {})
+    expect(list(proc.keys()) == ["kind", "style", "seed", "cecum_reached", "cecum_time_s", "insertion_at_cecum_mm",
+                                 "loop_reductions", "abdominal_pressure_s", "duration_s", "end_reason"],
+           f"summary.json procedure keys: {list(proc.keys())}")
+    expect(proc.get("kind") == "physician" and proc.get("style") == "bench_operator" and proc.get("seed") == 3
+           and proc.get("cecum_reached") is True and proc.get("end_reason") == "cecum_reached"
+           and proc.get("loop_reductions") == 0 and proc.get("abdominal_pressure_s") == 0,
+           f"summary.json procedure: {proc}")
+    expect(abs(proc["insertion_at_cecum_mm"] - 170.0) < 5.0, f"the tip 30 mm short of 200 mm: {proc}")
+    expect(abs(s["duration_s"] - proc["duration_s"]) < 1e-9 and s["duration_s"] < 60, "the run stops at the cecum")
+    expect(s["files"].get("procedure") == "procedure.csv", f"summary lists procedure.csv: {s['files']}")
+    hand = rows(os.path.join(out, "procedure.csv"))
+    world = rows(os.path.join(out, "world.csv"))
+    expect(len(hand) == len(world) and [r["time_s"] for r in hand] == [r["time_s"] for r in world],
+           "procedure.csv has world.csv's rows")
+    expect(list(hand[0].keys()) == ["time_s", "state", "speed_mm_per_s", "roll_deg", "steering", "pressure"],
+           f"procedure.csv columns: {list(hand[0].keys())}")
+    advancing = [float(r["speed_mm_per_s"]) for r in hand if r["state"] == "advance"]
+    expect(advancing and all(8.0 - 1e-6 <= v <= 10.0 + 1e-6 for v in advancing), "the bench pushes at 8-10 mm/s")
+    expect({r["state"] for r in hand} <= {"hold", "advance", "pause"}, f"bench states: {({r['state'] for r in hand})}")
+    # Scripted: the same tube, 7 s at 25 mm/s from 20 mm (the tip passes 170 mm at 6 s); the run
+    # goes on to the procedure's end.
+    with open(scenario, "w") as f:
+        json.dump(dict(base, procedure=[{"action": "advance", "start_s": 0, "end_s": 7, "speed_mm_per_s": 25}]), f)
+    out2 = os.path.join(d, "scripted")
+    run("simulate", scenario, "--out", out2, "--quiet")
+    proc = json.load(open(os.path.join(out2, "summary.json")))["procedure"]
+    expect(proc.get("kind") == "scripted" and "style" not in proc and proc.get("end_reason") == "end_of_procedure"
+           and proc.get("cecum_reached") is True, f"scripted procedure: {proc}")
+    hand = rows(os.path.join(out2, "procedure.csv"))
+    expect(all(r["state"] == "advance" and abs(float(r["speed_mm_per_s"]) - 25.0) < 1e-6 for r in hand[1:]),
+           "scripted procedure.csv: advance at 25 mm/s")
+    # Refusals, nothing written.
+    for extra, message in [
+            ({"physician": {"style": "surgeon", "seed": 1}}, "s.json: physician.style: unknown style 'surgeon'"),
+            ({"physician": {"style": "careful_expert", "seed": -1}}, "s.json: physician.seed: expected a whole number"),
+            ({"physician": {"style": "careful_expert", "seed": 1, "max_duration_s": 0}},
+             "s.json: physician.max_duration_s: 0 s must be in (0, 3600]"),
+            ({"physician": {"style": "careful_expert", "seed": 1}, "procedure": [{"action": "hold", "start_s": 0, "end_s": 1}]},
+             "s.json: physician: a scenario takes either 'procedure'"),
+            ({"physician": {"style": "careful_expert", "seed": 1}, "steering": [{"start_s": 0, "end_s": 1}]},
+             "s.json: steering: the physician decides"),
+            ({}, "s.json: procedure: missing; give 'procedure'")]:
+        with open(scenario, "w") as f:
+            json.dump(dict(base, **extra), f)
+        bad = os.path.join(d, "bad")
+        p = run("simulate", scenario, "--out", bad, "--quiet", expect_status=2)
+        expect(message in p.stderr and not os.path.exists(bad), f"refused naming the path: {p.stderr}")
+
+
+CHECKS = {"physician": check_physician, "patients": check_patients, "replay_bad_log": check_replay_bad_log, "demo": check_demo, "simulate_run_identical": check_simulate_run_identical, "loop_free": check_loop_free,
           "bad_recordings": check_bad_recordings, "batch": check_batch, "shell_injection": check_shell_injection,
           "hostile_json": check_hostile_json, "time_gap": check_time_gap, "option_ranges": check_option_ranges,
           "bom_and_long_lines": check_bom_and_long_lines, "box_faults": check_box_faults,
