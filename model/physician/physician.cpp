@@ -59,6 +59,7 @@ PhysicianStyleParameters physician_style_parameters(PhysicianStyle style) {
             p.loop_notice_excess_mm = 0;  // pushes on
             p.loop_reduce_excess_mm = 100;
             p.resistance_N = 45;
+            p.max_push_N = 60;
             p.discomfort_N = 0;
             p.reaction_s = 2.0;
             p.withdraw_speed_mm_per_s = 25;
@@ -83,6 +84,7 @@ PhysicianStyleParameters physician_style_parameters(PhysicianStyle style) {
             p.loop_notice_excess_mm = 0;  // watches no loop
             p.loop_reduce_excess_mm = 0;
             p.resistance_N = 25;
+            p.max_push_N = 30;
             p.discomfort_N = 0;
             p.reaction_s = 0.5;
             p.reduces_loops = false;
@@ -275,6 +277,7 @@ HandDecision Physician::decide(const PhysicianObservation& seen, double h_s) {
     }
 
     const Mode acting = mode_;  // what the hand does over this step (reported)
+    const double depth_at_start_mm = depth_mm_;
     switch (mode_) {
         case Mode::advance:
             speed = speed_mm_per_s_;
@@ -337,6 +340,20 @@ HandDecision Physician::decide(const PhysicianObservation& seen, double h_s) {
             break;
         case Mode::done: break;
     }
+    // The hand gives way: a push (or pull) beyond max_push_N replaces the step's own motion
+    // towards the colon (away from it) by a move back (forward) at give_way_speed, at once; what
+    // the hand was doing goes on from there.
+    bool gave_way = false;
+    if (mode_ != Mode::done && std::abs(seen.handle_force_N) >= p_.max_push_N) {
+        const double give = p_.give_way_speed_mm_per_s * h_s;
+        const double before = depth_mm_;
+        depth_mm_ = seen.handle_force_N > 0.0 ? std::min(depth_mm_, depth_at_start_mm) - give
+                                              : std::max(depth_mm_, depth_at_start_mm) + give;
+        depth_mm_ = std::clamp(depth_mm_, 0.0, cap_mm);
+        jiggle_anchor_mm_ -= before - depth_mm_;
+        speed = (depth_mm_ - depth_at_start_mm) / h_s;
+        gave_way = true;
+    }
 
     bool pressing = false;
     for (bool on : pressure_)
@@ -349,7 +366,7 @@ HandDecision Physician::decide(const PhysicianObservation& seen, double h_s) {
     d.steering = p_.steers && mode_ != Mode::reduce_turn && mode_ != Mode::reduce_withdraw &&
                  mode_ != Mode::done;
     d.pressure = pressure_;
-    d.state.state = std::string(mode_name(acting));
+    d.state.state = gave_way ? std::string("give_way") : std::string(mode_name(acting));
     d.state.speed_mm_per_s = speed;
     d.state.roll_deg = roll_rad_ / kRadPerDeg;
     d.state.steering = d.steering;

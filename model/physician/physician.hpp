@@ -71,6 +71,10 @@ struct PhysicianStyleParameters {
     double loop_notice_excess_mm = 20;
     double loop_reduce_excess_mm = 60;
     double resistance_N = 30;  ///< push force felt as resistance
+    /// The hand is not a rigid clamp: beyond this |handle force| it gives way at once (no
+    /// reaction time), moving the depth back at give_way_speed until the force is below it.
+    double max_push_N = 40;
+    double give_way_speed_mm_per_s = 20;
     double discomfort_N = 20;  ///< largest wall force (the patient's discomfort); 0 = none
     double reaction_s = 0.5;   ///< from noticing to acting
     // Loop reduction: turn clockwise, withdraw until the tip comes back with the hand.

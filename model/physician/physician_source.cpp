@@ -21,10 +21,15 @@ PhysicianObservation WorldObserver::observe(const World& world) {
     o.handle_force_N = world.handle_force_N();
     const ColonTube& colon = world.colon();
     o.cecum_path_mm = colon.length_mm();
-    if (tip_path_mm_ < 0) tip_path_mm_ = std::clamp(o.insertion_mm, 0.0, colon.length_mm());
+    double window_mm = kFirstTrackWindow_mm;
+    if (tip_path_mm_ < 0)
+        tip_path_mm_ = std::clamp(o.insertion_mm, 0.0, colon.length_mm());
+    else
+        window_mm = std::max(kMinTrackWindow_mm, kMaxTipSpeed_mm_per_s * (o.time_s - last_time_s_));
+    last_time_s_ = o.time_s;
     // Only the colon points around the tip's last place are displaced and searched (the
     // displacement of every point costs about as much as a sixth of a world step).
-    const double from_mm = tip_path_mm_ - kTrackWindow_mm, to_mm = tip_path_mm_ + kTrackWindow_mm;
+    const double from_mm = tip_path_mm_ - window_mm, to_mm = tip_path_mm_ + window_mm;
     const auto first = std::upper_bound(rest_arc_mm_.begin(), rest_arc_mm_.end(), from_mm);
     const auto last = std::lower_bound(rest_arc_mm_.begin(), rest_arc_mm_.end(), to_mm);
     const auto i0 = static_cast<std::size_t>(

@@ -15,19 +15,27 @@ namespace scopekin::model {
 
 /// What a physician sees and feels of a World. The tip's place along the colon is the colon
 /// coordinate of model/truth (the closest point of the displaced centerline, as its arc at
-/// rest: the mucosa the tip faces), tracked from step to step within kTrackWindow_mm of its last
-/// place (so it never jumps to another turn of a loop, and follows a colon that shortens over
-/// the scope).
+/// rest: the mucosa the tip faces), tracked from step to step: searched within
+/// kMaxTipSpeed_mm_per_s x the time since the last look (at least kMinTrackWindow_mm) of its last
+/// place. So it never jumps to another turn of a loop or a neighbouring lumen, follows a colon
+/// that shortens over the scope, and does not believe a tip that teleports (a world whose scope
+/// has gone unstable moves the tip hundreds of mm in one step).
 class WorldObserver {
 public:
     explicit WorldObserver(const World& world);
     PhysicianObservation observe(const World& world);
 
-    static constexpr double kTrackWindow_mm = 60.0;
+    /// 1 m/s: 25 times the fastest hand (a loop giving back its slack moves the tip at tens of
+    /// mm/s); 10 mm per 10 ms step.
+    static constexpr double kMaxTipSpeed_mm_per_s = 1000.0;
+    static constexpr double kMinTrackWindow_mm = 5.0;
+    /// The first look: around the insertion depth.
+    static constexpr double kFirstTrackWindow_mm = 60.0;
 
 private:
     std::vector<double> rest_arc_mm_;
     double tip_path_mm_ = -1;
+    double last_time_s_ = 0;
 };
 
 class PhysicianSource final : public HandCommandSource {

@@ -392,6 +392,34 @@ TEST(Physician, FeltResistanceStopsTheBenchOperatorsPush) {
     }
 }
 
+TEST(Physician, TheHandGivesWayBeyondItsLargestPushAtOnce) {
+    // 41 N (> the expert's 40 N): from the first step on the depth goes back at 20 mm/s (0.3 s:
+    // 6 mm), with no reaction time; the state says so. Below it again the hand goes on.
+    const PhysicianStyleParameters p = physician_style_parameters(PhysicianStyle::careful_expert);
+    Physician doc(spec(PhysicianStyle::careful_expert), kStart_mm + 100, 0.0, kScope_mm);
+    double depth = kStart_mm + 100;
+    for (int k = 0; k < 50; ++k) {
+        PhysicianObservation seen;
+        seen.time_s = k * kH;
+        seen.insertion_mm = depth;
+        seen.tip_path_mm = depth;
+        seen.cecum_path_mm = 1e6;
+        seen.handle_force_N = k < 30 ? p.max_push_N + 1.0 : 1.0;
+        const HandDecision d = doc.decide(seen, kH);
+        if (k < 30) {
+            EXPECT_EQ(d.state.state, "give_way") << k;
+            EXPECT_LT(d.command.insertion_mm, depth) << k;
+            EXPECT_NEAR(d.command.insertion_mm, depth - p.give_way_speed_mm_per_s * kH, 1e-9);
+        } else {
+            EXPECT_NE(d.state.state, "give_way") << k;
+        }
+        depth = d.command.insertion_mm;
+        if (k == 29) {
+            EXPECT_NEAR(depth, kStart_mm + 100 - 0.3 * p.give_way_speed_mm_per_s, 1e-9);
+        }
+    }
+}
+
 // --- the scenario key ----------------------------------------------------------------------------
 
 nlohmann::json physician_doc(const nlohmann::json& physician) {
