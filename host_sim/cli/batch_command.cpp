@@ -15,11 +15,15 @@
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/run_command.hpp"
+#include "host_sim/cli/shard.hpp"
 #include "host_sim/cli/simulate_command.hpp"
+#include "host_sim/recording/recording_format.hpp"
 #include "model/model_error.hpp"
 
 namespace scopekin::cli {
 namespace {
+
+using recording::csv_cell;
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
@@ -43,43 +47,11 @@ struct MergeOptions {
     std::string out;
 };
 
-/// FNV-1a 64 of the entry as written in the manifest: the shard an entry belongs to depends on
-/// the entry alone, not on its line or on the other entries, so editing a manifest moves nothing
-/// else between shards.
-std::uint64_t fnv1a(const std::string& text) {
-    std::uint64_t h = 0xcbf29ce484222325ULL;
-    for (const char c : text) {
-        h ^= static_cast<unsigned char>(c);
-        h *= 0x100000001b3ULL;
-    }
-    return h;
-}
-
 std::string trim(const std::string& s) {
     const auto b = s.find_first_not_of(" \t\r");
     if (b == std::string::npos) return "";
     const auto e = s.find_last_not_of(" \t\r");
     return s.substr(b, e - b + 1);
-}
-
-/// "I/N" with 0 <= I < N.
-bool parse_shard(const std::string& text, std::size_t& index, std::size_t& count) {
-    const auto slash = text.find('/');
-    if (slash == std::string::npos) return false;
-    try {
-        std::size_t used = 0;
-        const unsigned long i = std::stoul(text.substr(0, slash), &used);
-        if (used != slash) return false;
-        const std::string n_text = text.substr(slash + 1);
-        const unsigned long n = std::stoul(n_text, &used);
-        if (used != n_text.size() || n == 0 || i >= n || text[0] == '-' || n_text[0] == '-')
-            return false;
-        index = i;
-        count = n;
-        return true;
-    } catch (const std::exception&) {
-        return false;
-    }
 }
 
 /// A folder name for an entry: its file stem and 8 hex digits of its hash (two entries with the
@@ -92,16 +64,6 @@ std::string folder_name(const std::string& entry) {
     std::snprintf(hash, sizeof hash, "%08llx",
                   static_cast<unsigned long long>(fnv1a(entry) & 0xffffffffULL));
     return stem + "-" + hash;
-}
-
-std::string csv_cell(std::string text) {
-    if (text.find_first_of(",\"\n") == std::string::npos) return text;
-    std::string quoted = "\"";
-    for (char c : text) {
-        if (c == '"') quoted += '"';
-        quoted += c == '\n' ? ' ' : c;
-    }
-    return quoted + "\"";
 }
 
 std::string number(const Json& j, const char* key) {
@@ -158,7 +120,7 @@ int run_batch(const BatchOptions& options) {
     }
     std::vector<std::string> mine;
     for (const std::string& e : entries)
-        if (fnv1a(e) % shards == shard) mine.push_back(e);
+        if (shard_of(e, shards) == shard) mine.push_back(e);
 
     try {
         const fs::path dir(options.out);

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/simulator/live_simulation.hpp"
@@ -17,7 +18,32 @@ Json vec(const Eigen::Vector3d& v) {
     return Json::array({v.x(), v.y(), v.z()});
 }
 
+template <typename T>
+Json optional_json(const std::optional<T>& v) {
+    return v ? Json(*v) : Json(nullptr);
+}
+
 }  // namespace
+
+Json procedure_json(const model::ProcedureOutcome& o) {
+    Json j;
+    j["kind"] = o.kind;
+    const bool physician = o.kind == "physician";
+    if (physician) {
+        j["style"] = o.style;
+        j["seed"] = o.seed;
+    }
+    j["cecum_reached"] = o.cecum_reached;
+    j["cecum_time_s"] = optional_json(o.cecum_time_s);
+    j["insertion_at_cecum_mm"] = optional_json(o.insertion_at_cecum_mm);
+    if (physician) j["loop_reductions"] = o.loop_reductions;
+    j["abdominal_pressure_s"] = o.abdominal_pressure_s;
+    j["duration_s"] = o.duration_s;
+    j["end_reason"] = o.end_reason;
+    return j;
+}
+
+namespace {}  // namespace
 
 LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions& options) {
     const sensors::SensorSuiteConfig sensor_config =
@@ -26,27 +52,37 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     prepare_directory(
         dir, {"summary.json", "recording.csv", "recording.incomplete.csv", "world.csv",
               "world.incomplete.csv", "firmware.csv", "firmware.incomplete.csv", "truth.csv",
-              "truth.incomplete.csv", "contacts.csv", "contacts.incomplete.csv", "snapshots.json",
-              "forces.png", "advance.png", "snapshots.png"});
+              "truth.incomplete.csv", "contacts.csv", "contacts.incomplete.csv", "procedure.csv",
+              "procedure.incomplete.csv", "snapshots.json", "forces.png", "advance.png",
+              "snapshots.png"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     PartFile world(dir / "world.csv", dir / "world.incomplete.csv");
     PartFile firmware(dir / "firmware.csv", dir / "firmware.incomplete.csv");
     PartFile truth(dir / "truth.csv", dir / "truth.incomplete.csv");
+    PartFile procedure(dir / "procedure.csv", dir / "procedure.incomplete.csv");
     std::unique_ptr<PartFile> contacts;
     if (sc.outputs.contacts_file)
         contacts =
             std::make_unique<PartFile>(dir / "contacts.csv", dir / "contacts.incomplete.csv");
-    if (!options.quiet)
+    if (!options.quiet && sc.physician)
+        std::cerr << options.command << ": " << sc.source << ": a physician ("
+                  << model::physician_style_name(sc.physician->style) << ", seed "
+                  << sc.physician->seed << ") for at most " << sc.physician->max_duration_s
+                  << " s, in world steps of " << sc.settings.time_step_s << " s, colon '"
+                  << sc.colon->name() << "', sensors every 1 ms, firmware every "
+                  << host_sim::kBoxPeriodUs / 1000 << " ms, seed " << options.seed << std::endl;
+    else if (!options.quiet)
         std::cerr << options.command << ": " << sc.source << ": " << sc.procedure.end_s()
                   << " s in world steps of " << sc.settings.time_step_s << " s, colon '"
                   << sc.colon->name() << "', sensors every 1 ms, firmware every "
                   << host_sim::kBoxPeriodUs / 1000 << " ms, seed " << options.seed << std::endl;
     ProgressBar bar(options.quiet);
     LiveRunReport report;
-    report.result = host_sim::run_live(sc, sensor_config, options.seed,
-                                       {&recording.stream(), &world.stream(), &firmware.stream(),
-                                        contacts ? &contacts->stream() : nullptr, &truth.stream()},
-                                       [&](const model::SimulationProgress& p) { bar.update(p); });
+    report.result = host_sim::run_live(
+        sc, sensor_config, options.seed,
+        {&recording.stream(), &world.stream(), &firmware.stream(),
+         contacts ? &contacts->stream() : nullptr, &truth.stream(), &procedure.stream()},
+        [&](const model::SimulationProgress& p) { bar.update(p); });
     bar.done();
     const host_sim::LiveResult& r = report.result;
     const model::SimulationSummary& sum = r.world;
@@ -56,6 +92,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     files["world"] = world.finish(sum.complete).filename().string();
     files["firmware"] = firmware.finish(sum.complete).filename().string();
     files["truth"] = truth.finish(sum.complete).filename().string();
+    files["procedure"] = procedure.finish(sum.complete).filename().string();
     if (contacts) files["contacts"] = contacts->finish(sum.complete).filename().string();
     write_json(dir / "snapshots.json", r.snapshots);
     files["snapshots"] = "snapshots.json";
@@ -101,6 +138,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
                       {"region", r.final_tip_region},
                       {"position_mm", vec(sum.final_tip_mm)}};
     s["final_insertion_depth_mm"] = sum.final_insertion_depth_mm;
+    s["procedure"] = procedure_json(sum.procedure);
     s["alarms"] = r.box_json["alarms"];
     s["firmware"] = r.box_json;
     s["firmware"]["estimator_periods"] = r.firmware_periods;

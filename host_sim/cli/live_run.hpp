@@ -35,6 +35,9 @@ struct LiveRunReport {
 /// Throws ModelError (bad scenario or sensor configuration: exit 2) or OutputError (exit 3).
 LiveRunReport run_live_to_folder(const model::Scenario& scenario, const LiveRunOptions& options);
 
+/// summary.json "procedure": how the procedure went (model/scenario/README.md, "Outputs").
+nlohmann::ordered_json procedure_json(const model::ProcedureOutcome& outcome);
+
 /// The alarm timeline and the summary table (stdout), as `demo` prints them.
 void print_run_tables(const LiveRunReport& report);
 

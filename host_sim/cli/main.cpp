@@ -8,6 +8,7 @@
 #include "host_sim/cli/batch_command.hpp"
 #include "host_sim/cli/demo_command.hpp"
 #include "host_sim/cli/discrepancy_command.hpp"
+#include "host_sim/cli/evaluate_command.hpp"
 #include "host_sim/cli/patient_command.hpp"
 #include "host_sim/cli/replay_command.hpp"
 #include "host_sim/cli/run_command.hpp"
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
     scopekin::cli::add_batch_commands(app);
     scopekin::cli::add_discrepancy_command(app);
     scopekin::cli::add_patient_commands(app);
+    scopekin::cli::add_evaluate_commands(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::RuntimeError& status) {

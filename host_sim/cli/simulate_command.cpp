@@ -65,10 +65,21 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
         s["duration_s"].get<double>(), s["wall_time_s"].get<double>(),
         s["real_time_factor"].get<double>(), s["peak_handle_force_N"]["true"].get<double>(),
         s["alarms"].size());
+    const Json& procedure = s["procedure"];
+    if (procedure["kind"] == "physician")
+        std::printf(
+            "physician %s (seed %s): %s, %zu loop reduction(s)%s\n",
+            procedure["style"].get<std::string>().c_str(), procedure["seed"].dump().c_str(),
+            procedure["end_reason"].get<std::string>().c_str(),
+            procedure["loop_reductions"].get<std::size_t>(),
+            procedure["cecum_reached"].get<bool>()
+                ? (", cecum at " + num(procedure["cecum_time_s"].get<double>()) + " s with " +
+                   num(procedure["insertion_at_cecum_mm"].get<double>()) + " mm inserted")
+                      .c_str()
+                : "");
     std::printf(
-        "wrote recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, summary.json "
-        "into "
-        "%s\n",
+        "wrote recording.csv, world.csv, firmware.csv, truth.csv, procedure.csv, snapshots.json, "
+        "summary.json into %s\n",
         dir.string().c_str());
     return 0;
 }
@@ -135,8 +146,9 @@ void add_simulate_command(CLI::App& app) {
         "simulate",
         "Run a scenario file (schema in model/scenario/README.md). A world scenario is simulated "
         "live: the scope in "
-        "the colon driven by the procedure (with the scenario's truth effects), read by the sensor "
-        "models every 1 ms, "
+        "the colon driven by the procedure (\"procedure\": scripted, or \"physician\": hands "
+        "that react to the world, model/physician/README.md; with the scenario's truth effects), "
+        "read by the sensor models every 1 ms, "
         "and the unmodified firmware fed with what they deliver every 5 ms. Writes "
         "DIR/recording.csv (what the "
         "sensors delivered, host_sim/recording/RECORDING.md), DIR/world.csv (the true state at "
@@ -144,8 +156,9 @@ void add_simulate_command(CLI::App& app) {
         "DIR/firmware.csv (the box's outputs and fault bits per period), DIR/truth.csv (what the "
         "box "
         "estimates, true, at the same periods: host_sim/README.md, model/truth/README.md; its "
-        "episodes in the summary's \"truth\"), DIR/snapshots.json and "
-        "DIR/summary.json. "
+        "episodes in the summary's \"truth\"), DIR/procedure.csv (what the hand did, at "
+        "world.csv's rows), DIR/snapshots.json and DIR/summary.json (its \"procedure\": how the "
+        "procedure went, the cecum reached or not). "
         "A free beam "
         "scenario is solved statically: DIR/recording.csv has one row per output node. While "
         "running, CSV files "

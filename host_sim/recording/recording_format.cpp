@@ -89,6 +89,16 @@ std::string recording_header() {
     return header;
 }
 
+std::string csv_cell(std::string_view text) {
+    if (text.find_first_of(",\"\n\r") == std::string_view::npos) return std::string(text);
+    std::string quoted = "\"";
+    for (const char c : text) {
+        if (c == '"') quoted += '"';
+        quoted += c == '\n' || c == '\r' ? ' ' : c;
+    }
+    return quoted + "\"";
+}
+
 std::string shortest_number(double value) {
     if (std::isnan(value)) return "nan";
     if (std::isinf(value)) return value > 0 ? "inf" : "-inf";

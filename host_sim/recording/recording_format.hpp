@@ -24,6 +24,11 @@ const std::vector<std::string>& recording_columns();
 /// The header line (no newline): the columns joined by commas.
 std::string recording_header();
 
+/// A text as one CSV cell on one line (the summaries of `batch` and `evaluate`): unchanged
+/// unless it holds a comma, a quote or a line break; then in quotes, its quotes doubled and
+/// its line breaks turned into spaces.
+std::string csv_cell(std::string_view text);
+
 /// Plausible ranges: a row outside them is rejected by the reader and refused by the writer.
 /// The CAN signals' limits are the DBC's (the wire cannot carry more), the EM position and tip
 /// force limits the serial receiver's defaults (em_tracker_serial.md §3).  A value is inside when

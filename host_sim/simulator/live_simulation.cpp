@@ -137,6 +137,7 @@ LiveResult run_live(const model::Scenario& scenario,
     if (streams.world != nullptr)
         *streams.world << world_csv_header(scenario, model::output_nodes(scenario)) << '\n';
     if (streams.contacts != nullptr) *streams.contacts << contacts_csv_header() << '\n';
+    if (streams.procedure != nullptr) *streams.procedure << procedure_csv_header() << '\n';
 
     model::SimulationCallbacks callbacks;
     callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
@@ -190,6 +191,14 @@ LiveResult run_live(const model::Scenario& scenario,
     callbacks.on_sample = [&](const model::WorldRow& s, const model::World& w) {
         if (streams.world != nullptr) write_world_csv_row(*streams.world, s, latest);
         if (streams.contacts != nullptr) write_contacts_csv_rows(*streams.contacts, s.time_s, w);
+    };
+    std::string last_hand_state;
+    callbacks.on_hand_sample = [&](double time_s, const model::HandState& hand) {
+        if (streams.procedure != nullptr) write_procedure_csv_row(*streams.procedure, time_s, hand);
+        // Where the physician starts a loop reduction: the shape the loop has then.
+        if (scenario.physician && hand.state != last_hand_state && hand.state == "reduce_loop_turn")
+            take_snapshot("loop reduction starts");
+        last_hand_state = hand.state;
     };
     callbacks.on_progress = on_progress;
 

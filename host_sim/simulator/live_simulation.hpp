@@ -27,6 +27,8 @@ struct LiveStreams {
         nullptr;  ///< contacts.csv (loaded contacts at the output rate), optional
     std::ostream* truth =
         nullptr;  ///< truth.csv (what the box estimates, true, per box period), optional
+    std::ostream* procedure =
+        nullptr;  ///< procedure.csv (what the hand did, at the output rate), optional
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand

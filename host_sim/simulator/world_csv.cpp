@@ -71,4 +71,14 @@ void write_contacts_csv_rows(std::ostream& out, double time_s, const model::Worl
     }
 }
 
+std::string procedure_csv_header() {
+    return "time_s,state,speed_mm_per_s,roll_deg,steering,pressure";
+}
+
+void write_procedure_csv_row(std::ostream& out, double time_s, const model::HandState& hand) {
+    out << num(time_s) << ',' << hand.state << ',' << num(hand.speed_mm_per_s) << ','
+        << num(hand.roll_deg) << ',' << (hand.steering ? 1 : 0) << ',' << (hand.pressure ? 1 : 0)
+        << '\n';
+}
+
 }  // namespace scopekin::host_sim

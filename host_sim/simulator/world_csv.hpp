@@ -21,4 +21,10 @@ void write_world_csv_row(std::ostream& out, const model::WorldRow& row,
 std::string contacts_csv_header();
 void write_contacts_csv_rows(std::ostream& out, double time_s, const model::World& world);
 
+/// procedure.csv: what the hand did, one row per world.csv row (the same time_s): its state
+/// (a scripted action's name, or the physician's state), the commanded insertion speed and
+/// roll, tip steering and the assistant's pressure on (1) or off (0).
+std::string procedure_csv_header();
+void write_procedure_csv_row(std::ostream& out, double time_s, const model::HandState& hand);
+
 }  // namespace scopekin::host_sim

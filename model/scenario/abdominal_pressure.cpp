@@ -1,6 +1,7 @@
 #include "model/scenario/abdominal_pressure.hpp"
 
 #include <algorithm>
+#include <array>
 #include <string>
 
 #include "model/effects/effect_support.hpp"
@@ -22,8 +23,36 @@ AbdominalPressure::AbdominalPressure(std::vector<AbdominalPressureWindow> window
     }
 }
 
+AbdominalPressure::AbdominalPressure(std::shared_ptr<const SceneControl> control)
+    : control_(std::move(control)) {
+    if (!control_) throw ModelError("abdominal_pressure: no control given");
+}
+
 void AbdominalPressure::add_scope_loads(const WorldEffectView& view,
                                         std::vector<NodalLoad>& loads) const {
+    if (control_) {
+        // Each region's firmness from when the assistant pressed there.
+        std::array<double, 8> k_N_per_mm2{};
+        bool any = false;
+        for (std::size_t r = 0; r < k_N_per_mm2.size(); ++r) {
+            const std::optional<double>& since = control_->pressure_since_s[r];
+            if (!since) continue;
+            const double ramp = control_->pressure_ramp_s;
+            const double pressed =
+                ramp > 0.0 ? std::clamp((view.time_s - *since) / ramp, 0.0, 1.0) : 1.0;
+            k_N_per_mm2[r] = pressed * control_->pressure_stiffness_N_per_mm2;
+            any = any || k_N_per_mm2[r] > 0.0;
+        }
+        if (!any) return;
+        effects::for_each_node_beyond_rest_wall(
+            view, [&](ColonRegion r) { return k_N_per_mm2[static_cast<std::size_t>(r)] > 0.0; },
+            [&](const effects::NodeBeyondRestWall& n) {
+                const double k = k_N_per_mm2[static_cast<std::size_t>(n.region)];
+                loads.push_back({n.node, -k * n.node_length_mm * n.excess_mm * n.outward,
+                                 Eigen::Vector3d::Zero()});
+            });
+        return;
+    }
     const AbdominalPressureWindow* window = nullptr;
     for (const AbdominalPressureWindow& w : windows_)
         if (view.time_s >= w.start_s && view.time_s < w.end_s) window = &w;

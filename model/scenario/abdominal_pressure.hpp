@@ -14,10 +14,12 @@
 // from 0): a firm hand switched on within one step jolts the stiff shaft. The same law as the truth effect
 // mesenteric_retraction, but switched on in time windows and over chosen regions: it is what
 // the assistant does, not a property of the patient. The firmware never sees it.
+#include <memory>
 #include <vector>
 
 #include "model/colon/colon_region.hpp"
 #include "model/colon/colon_tube.hpp"
+#include "model/scenario/hand_command_source.hpp"
 #include "model/world/world_effect.hpp"
 
 namespace scopekin::model {
@@ -35,11 +37,16 @@ class AbdominalPressure final : public WorldEffect {
 public:
     /// Throws ModelError for a bad window (names "abdominal_pressure[i].field").
     explicit AbdominalPressure(std::vector<AbdominalPressureWindow> windows);
+    /// Switched by a source instead (a physician scenario): presses each region from
+    /// `control->pressure_since_s[region]` on, k rising over its pressure_ramp_s (read at every
+    /// step).
+    explicit AbdominalPressure(std::shared_ptr<const SceneControl> control);
     std::string name() const override { return "abdominal_pressure"; }
     void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
 
 private:
     std::vector<AbdominalPressureWindow> windows_;
+    std::shared_ptr<const SceneControl> control_;
 };
 
 }  // namespace scopekin::model

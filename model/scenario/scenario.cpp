@@ -329,6 +329,35 @@ void read_procedure(const JsonObject& root, Scenario& sc) {
     sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
 }
 
+/// "physician": {"style": ..., "seed": N, "max_duration_s": S}; the steering and pressure effects
+/// it switches are added to the scenario's effects.
+void read_physician(const JsonObject& root, Scenario& sc) {
+    const JsonObject o = root.object("physician");
+    o.allow_only({"style", "seed", "max_duration_s"});
+    PhysicianSpec spec;
+    const std::string style = o.string("style");
+    const auto known = physician_style_from_name(style);
+    if (!known)
+        throw ModelError(o.field("style") + ": unknown style " + io::quote_text(style) +
+                         " (known: " + physician_style_list() + ")");
+    spec.style = *known;
+    spec.seed = read_patient_seed(o, "seed");
+    spec.max_duration_s = physician_style_parameters(spec.style).default_max_duration_s;
+    if (o.has("max_duration_s")) {
+        spec.max_duration_s = o.number("max_duration_s");
+        if (!(spec.max_duration_s > 0.0 && spec.max_duration_s <= kMaxPhysicianDuration_s))
+            throw ModelError(o.field("max_duration_s") + ": " + number_text(spec.max_duration_s) +
+                             " s must be in (0, " + number_text(kMaxPhysicianDuration_s) +
+                             "] (1 h at most)");
+        if (spec.max_duration_s < sc.settings.time_step_s * (1.0 - 1e-9))
+            throw ModelError(o.field("max_duration_s") + ": " + number_text(spec.max_duration_s) +
+                             " s is shorter than one time step (solver.time_step_s = " +
+                             number_text(sc.settings.time_step_s) + " s)");
+    }
+    sc.physician = spec;
+    sc.scene_control = std::make_shared<SceneControl>();
+}
+
 /// "patient": {"seed": N} (draw_patient) or {"file": "patient.json"} (relative to the scenario
 /// file, read_patient_file).
 PatientSpec read_patient_key(const JsonObject& o, const std::string& source) {
@@ -401,7 +430,7 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
     sc.kind = ScenarioKind::world;
     root.allow_only({"description", "colon", "colon_regions", "scope", "gravity_mm_per_s2",
                      "initial_insertion_mm", "solver", "procedure", "outputs", "truth_effects",
-                     "sensors", "steering", "abdominal_pressure", "patient"});
+                     "sensors", "steering", "abdominal_pressure", "patient", "physician"});
     sc.scope = read_scope(root.object("scope"), sc.scope_model);
     if (patient) {
         const JsonObject key = root.object("patient");
@@ -471,7 +500,27 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
         throw ModelError(source + ": " + e.what());
     }
 
-    if (with_run) read_procedure(root, sc);
+    if (with_run) {
+        if (root.has("procedure") && root.has("physician"))
+            throw ModelError(root.field("physician") +
+                             ": a scenario takes either 'procedure' (the hand's scripted "
+                             "timeline) or 'physician' (a procedure generator that reacts to the "
+                             "world), not both");
+        if (!root.has("procedure") && !root.has("physician"))
+            throw ModelError(root.field("procedure") +
+                             ": missing; give 'procedure' (the hand's scripted timeline) or "
+                             "'physician' (a procedure generator that reacts to the world)");
+        for (const char* key : {"steering", "abdominal_pressure"})
+            if (root.has("physician") && root.has(key))
+                throw ModelError(root.field(key) +
+                                 ": the physician decides when to steer the tip and when the "
+                                 "assistant presses; remove '" +
+                                 std::string(key) + "' or 'physician'");
+        if (root.has("physician"))
+            read_physician(root, sc);
+        else
+            read_procedure(root, sc);
+    }
 
     if (root.has("truth_effects"))
         sc.effects = read_world_effects(root.array("truth_effects"), root.field("truth_effects"));
@@ -546,6 +595,12 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
             sc.abdominal_pressure.push_back(window);
         }
         sc.effects.push_back(std::make_shared<AbdominalPressure>(sc.abdominal_pressure));
+    }
+    if (sc.physician) {
+        sc.effects.push_back(std::make_shared<TipSteering>(
+            sc.scene_control, *sc.colon, sc.scope.section.bending_stiffness_z_Nmm2,
+            sc.scope.length_mm / static_cast<double>(sc.scope.elements)));
+        sc.effects.push_back(std::make_shared<AbdominalPressure>(sc.scene_control));
     }
     if (root.has("outputs"))
         sc.outputs = read_outputs(root.object("outputs"), sc.scope.length_mm, sc.scope.elements,

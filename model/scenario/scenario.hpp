@@ -2,7 +2,8 @@
 // Scenario files (model/scenario/README.md): what `scopekin simulate` runs. Two kinds, told apart
 // by their top-level keys:
 //  * a world scenario ("colon", or "patient": a drawn or saved virtual patient, model/patient/):
-//    a colon, a scope, solver settings, a procedure at the handle and the outputs wanted;
+//    a colon, a scope, solver settings, a procedure at the handle (scripted, or a "physician"
+//    who reacts to the world, model/physician/) and the outputs wanted;
 //  * a free beam scenario ("beam"): exactly a beam problem file (model/io/beam_problem.hpp),
 //    solved statically.
 // Read strictly: unknown keys, wrong types and unphysical values are rejected with the field's
@@ -18,7 +19,9 @@
 #include "model/colon/colon_tube.hpp"
 #include "model/io/beam_problem.hpp"
 #include "model/patient/patient.hpp"
+#include "model/physician/physician.hpp"
 #include "model/scenario/abdominal_pressure.hpp"
+#include "model/scenario/hand_command_source.hpp"
 #include "model/scenario/procedure.hpp"
 #include "model/scenario/tip_steering.hpp"
 #include "model/world/world.hpp"
@@ -51,7 +54,13 @@ struct Scenario {
     std::string scope_model = "cf_q160l";
     ScopeSpec scope;
     WorldSettings settings;
+    /// "procedure": the hand's scripted timeline (empty with a physician).
     Procedure procedure;
+    /// "physician": a procedure generator that reacts to the world (model/physician/), instead
+    /// of "procedure"; it switches the tip steering and the abdominal pressure itself, through
+    /// `scene_control` (read by the TipSteering and AbdominalPressure in `effects`).
+    std::optional<PhysicianSpec> physician;
+    std::shared_ptr<SceneControl> scene_control;
     ScenarioOutputs outputs;
     /// "truth_effects": physical effects the firmware's model lacks (model/effects/EFFECTS.md),
     /// passed to the World by build_world. Empty = none.
@@ -72,7 +81,7 @@ struct Scenario {
 
 /// Reads and validates a scenario document; `source` names it in messages.
 Scenario read_scenario(const nlohmann::json& document, const std::string& source);
-/// Reads a world model: a world scenario's document without its run. "procedure" and
+/// Reads a world model: a world scenario's document without its run. "procedure", "physician" and
 /// "initial_insertion_mm" are not read (whoever runs the model gives them: `scopekin discrepancy`
 /// drives it with a recording); every other key is read and checked as read_scenario does.
 /// Scenario::effects is left empty: a run makes its own instances (read_world_effects of the
@@ -83,7 +92,7 @@ Scenario read_world_model(const nlohmann::json& document, const std::string& sou
 void set_initial_insertion(Scenario& scenario, double initial_insertion_mm);
 /// New instances of the effects the scenario's patient (its scope's "ei_profile"), "steering" and
 /// "abdominal_pressure" windows add (in that order, after the truth effects); none for an absent
-/// patient or an empty list, which act on nothing.
+/// patient or an empty list, which act on nothing. (A world model has no physician.)
 std::vector<std::shared_ptr<const WorldEffect>> scene_effects(const Scenario& scenario);
 /// Reads a scenario file. A key "model": "FILE" (relative to the scenario file; e.g. the model.json
 /// of `scopekin discrepancy`) takes every key from that model file that the scenario does not

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "model/model_error.hpp"
+#include "model/physician/physician_source.hpp"
 
 namespace scopekin::model {
 namespace {
@@ -68,14 +69,82 @@ WorldRow sample_world(const World& world, const WorldStepReport* last_step,
     return s;
 }
 
+namespace {
+
+/// A scripted procedure's player, watching the tip's arrival at the cecum as a physician would
+/// see it (WorldObserver) and telling what the hand does (procedure.csv).
+class ScriptedSource final : public HandCommandSource {
+public:
+    ScriptedSource(const World& world, const Scenario& scenario)
+        : world_(world),
+          scenario_(scenario),
+          player_(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(),
+                  world.roll_rad()),
+          observer_(world) {}
+
+    HandleCommand command_for_step(std::size_t step, double t_s, double h_s, double depth_now_mm,
+                                   double roll_now_rad) override {
+        if (!outcome_.cecum_reached) {
+            const PhysicianObservation seen = observer_.observe(world_);
+            if (seen.tip_path_mm >= seen.cecum_path_mm - kCecumReach_mm) {
+                outcome_.cecum_reached = true;
+                outcome_.cecum_time_s = seen.time_s;
+                outcome_.insertion_at_cecum_mm = seen.insertion_mm;
+            }
+        }
+        const HandleCommand c = player_.command(t_s, h_s, depth_now_mm, roll_now_rad);
+        const int action = player_.current_action();
+        const auto& actions = scenario_.procedure.actions();
+        state_.state =
+            action < 0 ? std::string("hold")
+                       : std::string(action_name(actions[static_cast<std::size_t>(action)].kind));
+        state_.speed_mm_per_s = c.force_controlled ? 0.0 : (c.insertion_mm - depth_now_mm) / h_s;
+        state_.roll_deg = (c.torque_controlled ? roll_now_rad : c.roll_rad) * kDegPerRad;
+        const double t_end = t_s + h_s;  // the effects' windows are judged at the step's end
+        state_.steering = false;
+        for (const SteeringWindow& w : scenario_.steering)
+            state_.steering = state_.steering || (t_end >= w.start_s && t_end < w.end_s);
+        state_.pressure = false;
+        for (const AbdominalPressureWindow& w : scenario_.abdominal_pressure)
+            state_.pressure = state_.pressure || (t_end >= w.start_s && t_end < w.end_s);
+        if (state_.pressure) outcome_.abdominal_pressure_s += h_s;
+        (void)step;
+        return c;
+    }
+    std::vector<std::string> warnings() const override { return player_.warnings(); }
+    HandState hand_state() const override { return state_; }
+    ProcedureOutcome outcome() const override { return outcome_; }
+
+private:
+    const World& world_;
+    const Scenario& scenario_;
+    ProcedurePlayer player_;
+    WorldObserver observer_;
+    HandState state_;
+    ProcedureOutcome outcome_;
+};
+
+}  // namespace
+
 SimulationSummary run_simulation(World& world, const Scenario& scenario,
                                  const SimulationCallbacks& callbacks) {
     const double h = world.time_step_s();
+    if (scenario.physician) {
+        const double end = scenario.physician->max_duration_s;
+        const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
+        PhysicianSource physician(world, *scenario.physician, scenario.scene_control);
+        SimulationSummary sum =
+            run_simulation(world, scenario, physician, {0, step_count, end}, callbacks);
+        if (sum.procedure.end_reason.empty()) sum.procedure.end_reason = "max_duration";
+        return sum;
+    }
     const double end = scenario.procedure.end_s();
     const auto step_count = static_cast<std::size_t>(std::max(0.0, std::ceil(end / h - 1e-9)));
-    ProcedurePlayer player(scenario.procedure, world.insertion_depth_mm(), world.scope_length_mm(),
-                           world.roll_rad());
-    return run_simulation(world, scenario, player, {0, step_count, end}, callbacks);
+    ScriptedSource player(world, scenario);
+    SimulationSummary sum =
+        run_simulation(world, scenario, player, {0, step_count, end}, callbacks);
+    if (sum.procedure.end_reason.empty()) sum.procedure.end_reason = "end_of_procedure";
+    return sum;
 }
 
 SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCommandSource& hand,
@@ -94,6 +163,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
     auto maybe_sample = [&](const WorldStepReport* last) {
         if (world.time_s() + eps < static_cast<double>(next_sample) / rate) return;
         if (callbacks.on_sample) callbacks.on_sample(sample_world(world, last, nodes), world);
+        if (callbacks.on_hand_sample) callbacks.on_hand_sample(world.time_s(), hand.hand_state());
         ++sum.samples;
         while (static_cast<double>(next_sample) / rate <= world.time_s() + eps)
             ++next_sample;
@@ -103,6 +173,10 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
     std::size_t sweeps_total = 0;
     sum.complete = true;
     for (std::size_t step = span.first_step + 1; step <= span.last_step; ++step) {
+        if (hand.finished()) {
+            sum.end_time_s = world.time_s();  // the source ended the run here
+            break;
+        }
         const HandleCommand command = hand.command_for_step(
             step, world.time_s(), h, world.insertion_depth_mm(), world.roll_rad());
         const WorldStepReport report = world.step(command);
@@ -182,6 +256,9 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
     sum.final_insertion_depth_mm = world.insertion_depth_mm();
     sum.final_roll_deg = world.roll_rad() * kDegPerRad;
     sum.warnings = hand.warnings();
+    sum.procedure = hand.outcome();
+    sum.procedure.duration_s = world.time_s();
+    if (!sum.complete) sum.procedure.end_reason = "failed_step";
     return sum;
 }
 

@@ -73,6 +73,9 @@ struct SimulationSummary {
     double final_insertion_depth_mm = 0;
     double final_roll_deg = 0;
     std::vector<std::string> warnings;
+    /// How the procedure went (summary.json "procedure"): the source's outcome, with
+    /// duration_s the world time reached and end_reason "failed_step" for a failed run.
+    ProcedureOutcome procedure;
 };
 
 struct SimulationCallbacks {
@@ -83,6 +86,9 @@ struct SimulationCallbacks {
     /// Called after every successful step with the world (before on_sample / on_progress); the
     /// host simulator runs its sensors and the firmware here.
     std::function<void(const World&, const WorldStepReport&)> on_step;
+    /// Called with every sample (after on_sample): the hand's state at the command that led
+    /// there (procedure.csv).
+    std::function<void(double time_s, const HandState&)> on_hand_sample;
 };
 
 /// Builds the world of a world scenario. Throws ModelError (naming the scenario file) if the
@@ -105,13 +111,16 @@ struct SimulationSpan {
     double end_s = 0;  ///< world time at last_step (SimulationSummary::end_time_s, progress)
 };
 
-/// The stepping loop: steps `world` through `span` with the commands of `hand`, until the end or
-/// the first failed or unphysical step. `scenario` gives the samples' rate and node columns.
+/// The stepping loop: steps `world` through `span` with the commands of `hand`, until the end,
+/// the source finishing (HandCommandSource::finished: the run then ends where it is) or the first
+/// failed or unphysical step. `scenario` gives the samples' rate and node columns.
 SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCommandSource& hand,
                                  const SimulationSpan& span, const SimulationCallbacks& callbacks);
 
 /// Plays the scenario's procedure on `world` (fresh from build_world) until its end or the first
-/// failed or unphysical step.
+/// failed or unphysical step; or, with a "physician", lets the physician (model/physician/) drive
+/// until the cecum is reached, it gives up, or physician.max_duration_s. Either way the tip's
+/// arrival at the cecum is watched (ProcedureOutcome; kCecumReach_mm).
 SimulationSummary run_simulation(World& world, const Scenario& scenario,
                                  const SimulationCallbacks& callbacks);
 

@@ -25,11 +25,27 @@ TipSteering::TipSteering(std::vector<SteeringWindow> windows, const ColonTube& c
     }
 }
 
+TipSteering::TipSteering(std::shared_ptr<const SceneControl> control, const ColonTube& colon,
+                         double bending_stiffness_Nmm2, double element_mm)
+    : control_(std::move(control)),
+      colon_(colon),
+      ei_Nmm2_(bending_stiffness_Nmm2),
+      element_mm_(element_mm) {
+    if (!control_) throw ModelError("tip_steering: no control given");
+}
+
 void TipSteering::add_scope_loads(const WorldEffectView& view,
                                   std::vector<NodalLoad>& loads) const {
     const SteeringWindow* window = nullptr;
     for (const SteeringWindow& w : windows_)
         if (view.time_s >= w.start_s && view.time_s < w.end_s) window = &w;
+    SteeringWindow switched;
+    if (control_ && control_->steering) {
+        switched.lookahead_mm = control_->steering_lookahead_mm;
+        switched.bending_section_mm = control_->steering_bending_section_mm;
+        switched.gain = control_->steering_gain;
+        window = &switched;
+    }
     const std::size_t nodes = view.scope_nodes_mm.size();
     if (nodes < 3) return;
     const std::size_t tip = nodes - 1;

@@ -12,9 +12,11 @@
 // The moments are recomputed from the state at the start of each step and held over it.
 // The firmware never sees the steering: it is what the hand does at the wheels, not at the shaft.
 #include <Eigen/Dense>
+#include <memory>
 #include <vector>
 
 #include "model/colon/colon_tube.hpp"
+#include "model/scenario/hand_command_source.hpp"
 #include "model/world/world_effect.hpp"
 
 namespace scopekin::model {
@@ -34,11 +36,16 @@ public:
     /// `element_mm` the scope's element length. Throws ModelError for a bad window.
     TipSteering(std::vector<SteeringWindow> windows, const ColonTube& colon,
                 double bending_stiffness_Nmm2, double element_mm);
+    /// Switched by a source instead (a physician scenario): steers while `control->steering`,
+    /// with its lookahead, bending section and gain (read at every step).
+    TipSteering(std::shared_ptr<const SceneControl> control, const ColonTube& colon,
+                double bending_stiffness_Nmm2, double element_mm);
     std::string name() const override { return "tip_steering"; }
     void add_scope_loads(const WorldEffectView& view, std::vector<NodalLoad>& loads) const override;
 
 private:
     std::vector<SteeringWindow> windows_;
+    std::shared_ptr<const SceneControl> control_;
     ColonTube colon_;
     double ei_Nmm2_;
     double element_mm_;

@@ -1,0 +1,249 @@
+#include "host_sim/evaluate/case_run.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "host_sim/recording/recording_reader.hpp"
+#include "model/io/strict_json.hpp"
+
+namespace scopekin::evaluate {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// The cells of the wanted columns of a CSV file without quoted cells (firmware.csv,
+/// truth.csv): one vector of texts per wanted column, and each row's time_s text.
+struct Columns {
+    std::vector<std::vector<std::string>> cells;  ///< [wanted column][row]
+    std::vector<std::size_t> lines;               ///< the 1-based line of each row
+};
+
+std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> out;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ','))
+        out.push_back(cell);
+    if (!line.empty() && line.back() == ',') out.emplace_back();
+    return out;
+}
+
+Columns read_columns(const fs::path& file, const std::vector<std::string>& wanted) {
+    std::ifstream in(file);
+    if (!in) throw CaseDataError(file.string() + ": cannot be read (the run did not write it)");
+    std::string line;
+    if (!std::getline(in, line)) throw CaseDataError(file.string() + ": empty");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::vector<std::string> header = split(line);
+    std::vector<std::size_t> index;
+    for (const std::string& w : wanted) {
+        std::size_t k = 0;
+        while (k < header.size() && header[k] != w)
+            ++k;
+        if (k == header.size())
+            throw CaseDataError(file.string() + ": line 1: missing column '" + w + "'");
+        index.push_back(k);
+    }
+    Columns c;
+    c.cells.resize(wanted.size());
+    std::size_t number = 1;
+    while (std::getline(in, line)) {
+        ++number;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line.empty()) continue;
+        const std::vector<std::string> cells = split(line);
+        if (cells.size() != header.size())
+            throw CaseDataError(file.string() + ": line " + std::to_string(number) + ": " +
+                                std::to_string(cells.size()) + " cells, the header has " +
+                                std::to_string(header.size()));
+        for (std::size_t w = 0; w < wanted.size(); ++w)
+            c.cells[w].push_back(cells[index[w]]);
+        c.lines.push_back(number);
+    }
+    return c;
+}
+
+double number(const std::string& text, const fs::path& file, std::size_t line,
+              const std::string& column) {
+    if (text.empty()) return kNaN;
+    double v = 0;
+    const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
+        throw CaseDataError(file.string() + ": line " + std::to_string(line) + ", column " +
+                            column + ": " + model::io::quote_text(text) + " is not a number");
+    return v;
+}
+
+std::vector<double> numbers(const Columns& c, std::size_t w, const fs::path& file,
+                            const std::string& column) {
+    std::vector<double> out;
+    out.reserve(c.cells[w].size());
+    for (std::size_t r = 0; r < c.cells[w].size(); ++r)
+        out.push_back(number(c.cells[w][r], file, c.lines[r], column));
+    return out;
+}
+
+template <typename T>
+std::vector<T> whole(const Columns& c, std::size_t w, const fs::path& file,
+                     const std::string& column) {
+    std::vector<T> out;
+    out.reserve(c.cells[w].size());
+    for (std::size_t r = 0; r < c.cells[w].size(); ++r) {
+        const std::string& text = c.cells[w][r];
+        std::uint64_t v = 0;
+        const auto res = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (text.empty() || res.ec != std::errc() || res.ptr != text.data() + text.size() ||
+            v > std::numeric_limits<T>::max())
+            throw CaseDataError(file.string() + ": line " + std::to_string(c.lines[r]) +
+                                ", column " + column + ": " + model::io::quote_text(text) +
+                                " is not a whole number in range");
+        out.push_back(static_cast<T>(v));
+    }
+    return out;
+}
+
+std::optional<double> optional_number(const Json& j, const char* key) {
+    if (!j.contains(key) || !j[key].is_number()) return std::nullopt;
+    return j[key].get<double>();
+}
+
+}  // namespace
+
+std::vector<Episode> read_episodes(const Json& list, const std::string& where) {
+    std::vector<Episode> out;
+    if (!list.is_array()) throw CaseDataError(where + ": expected a list of episodes");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+        const Json& e = list[i];
+        if (!e.is_object() || !e.contains("onset_s") || !e["onset_s"].is_number())
+            throw CaseDataError(where + "[" + std::to_string(i) + "]: no numeric onset_s");
+        Episode ep;
+        ep.onset_s = e["onset_s"].get<double>();
+        ep.end_s = optional_number(e, "end_s");
+        if (e.contains("type") && e["type"].is_string() && e.contains("region") &&
+            e["region"].is_string())
+            ep.label = e["type"].get<std::string>() + " " + e["region"].get<std::string>();
+        out.push_back(ep);
+    }
+    return out;
+}
+
+ProcedureOutcome read_procedure(const Json& summary) {
+    ProcedureOutcome p;
+    if (!summary.contains("procedure") || !summary["procedure"].is_object()) return p;
+    const Json& j = summary["procedure"];
+    p.known = true;
+    p.kind = j.value("kind", "");
+    p.style = j.contains("style") && j["style"].is_string() ? j["style"].get<std::string>() : "";
+    if (j.contains("cecum_reached") && j["cecum_reached"].is_boolean())
+        p.cecum_reached = j["cecum_reached"].get<bool>();
+    p.cecum_time_s = optional_number(j, "cecum_time_s");
+    p.insertion_at_cecum_mm = optional_number(j, "insertion_at_cecum_mm");
+    return p;
+}
+
+CaseRun read_case_run(const fs::path& folder) {
+    CaseRun run;
+    const fs::path summary_file = folder / "summary.json";
+    if (!fs::is_regular_file(summary_file))
+        throw CaseDataError(summary_file.string() +
+                            ": missing (the case was not run, or its run was killed)");
+    Json s;
+    try {
+        s = model::io::parse_json_file(summary_file.string());
+    } catch (const std::exception& e) {
+        throw CaseDataError(e.what());
+    }
+    if (!s.is_object()) throw CaseDataError(summary_file.string() + ": not a JSON object");
+    run.status = s.value("status", "");
+    run.message =
+        s.contains("message") && s["message"].is_string() ? s["message"].get<std::string>() : "";
+    run.duration_s = optional_number(s, "duration_s").value_or(0.0);
+    run.wall_time_s = optional_number(s, "wall_time_s").value_or(0.0);
+    run.procedure = read_procedure(s);
+    if (run.status != "complete") return run;  // a failed run is listed, not scored
+    if (!s.contains("truth") || !s["truth"].is_object())
+        throw CaseDataError(summary_file.string() + ": no \"truth\" section");
+    const Json& t = s["truth"];
+    run.loop_episodes = read_episodes(t.value("loop_episodes", Json::array()),
+                                      summary_file.string() + ": truth.loop_episodes");
+    const Json forces = t.value("force_episodes", Json::object());
+    run.warning_episodes =
+        read_episodes(forces.value("warning_10N", Json::array()),
+                      summary_file.string() + ": truth.force_episodes.warning_10N");
+    run.critical_episodes =
+        read_episodes(forces.value("critical_14N", Json::array()),
+                      summary_file.string() + ": truth.force_episodes.critical_14N");
+
+    const fs::path truth_file = folder / "truth.csv";
+    const Columns truth =
+        read_columns(truth_file, {"time_s", "insertion_mm", "tip_path_mm", "max_station_force_N"});
+    const fs::path fw_file = folder / "firmware.csv";
+    const Columns fw =
+        read_columns(fw_file, {"time_s", "tip_path_mm", "max_contact_force_N", "self_lock_alarm",
+                               "contact_force_level", "fault_flags"});
+    if (truth.lines.size() != fw.lines.size())
+        throw CaseDataError(truth_file.string() + " has " + std::to_string(truth.lines.size()) +
+                            " rows, " + fw_file.string() + " " + std::to_string(fw.lines.size()) +
+                            ": they must have one row per box period each");
+    for (std::size_t r = 0; r < truth.lines.size(); ++r)
+        if (truth.cells[0][r] != fw.cells[0][r])
+            throw CaseDataError(truth_file.string() + ": line " + std::to_string(truth.lines[r]) +
+                                ": time_s " + model::io::quote_text(truth.cells[0][r]) +
+                                " is not " + fw_file.string() + "'s " +
+                                model::io::quote_text(fw.cells[0][r]));
+    run.time_s = numbers(truth, 0, truth_file, "time_s");
+    run.insertion_mm = numbers(truth, 1, truth_file, "insertion_mm");
+    run.true_tip_path_mm = numbers(truth, 2, truth_file, "tip_path_mm");
+    run.true_max_station_force_N = numbers(truth, 3, truth_file, "max_station_force_N");
+    run.box_tip_path_mm = numbers(fw, 1, fw_file, "tip_path_mm");
+    run.box_max_contact_force_N = numbers(fw, 2, fw_file, "max_contact_force_N");
+    run.box_self_lock = whole<std::uint8_t>(fw, 3, fw_file, "self_lock_alarm");
+    run.box_contact_level = whole<std::uint8_t>(fw, 4, fw_file, "contact_force_level");
+    run.box_fault_flags = whole<std::uint32_t>(fw, 5, fw_file, "fault_flags");
+    for (std::size_t k = 1; k < run.time_s.size(); ++k)
+        if (!(run.time_s[k] > run.time_s[k - 1]))
+            throw CaseDataError(truth_file.string() + ": line " + std::to_string(truth.lines[k]) +
+                                ": time_s is not later than the line before");
+
+    const fs::path rec_file = folder / "recording.csv";
+    recording::Recording rec;
+    try {
+        rec = recording::RecordingReader().read_file(rec_file.string());
+    } catch (const recording::RecordingError& e) {
+        throw CaseDataError(rec_file.string() + ": " + e.what());
+    }
+    double force = kNaN, insertion = kNaN;
+    std::size_t next = 0;
+    run.handle_force_N.reserve(run.time_s.size());
+    for (const recording::RecordingRow& row : rec.rows) {
+        const double row_s = static_cast<double>(row.time_us) * 1e-6;
+        if (row.handle) force = row.handle->force_N;
+        if (row.insertion_roll) insertion = row.insertion_roll->insertion_mm;
+        if (!row.handle && !row.insertion_roll) continue;
+        while (next < run.time_s.size() && run.time_s[next] < row_s - 1e-9) {
+            run.handle_force_N.push_back(run.sample_force_N.empty() ? kNaN
+                                                                    : run.sample_force_N.back());
+            run.handle_insertion_mm.push_back(
+                run.sample_insertion_mm.empty() ? kNaN : run.sample_insertion_mm.back());
+            ++next;
+        }
+        run.sample_time_s.push_back(row_s);
+        run.sample_force_N.push_back(force);
+        run.sample_insertion_mm.push_back(insertion);
+    }
+    while (next < run.time_s.size()) {
+        run.handle_force_N.push_back(run.sample_force_N.empty() ? kNaN : run.sample_force_N.back());
+        run.handle_insertion_mm.push_back(
+            run.sample_insertion_mm.empty() ? kNaN : run.sample_insertion_mm.back());
+        ++next;
+    }
+    return run;
+}
+
+}  // namespace scopekin::evaluate

@@ -1,0 +1,78 @@
+#pragma once
+// One evaluated case's run folder, read back for scoring (host_sim/evaluate/README.md, "What a
+// case is scored on"): the truth at the box's periods (truth.csv and summary.json "truth"), the
+// box's outputs (firmware.csv), the handle sensors as the box received them (recording.csv) and
+// the procedure's outcome (summary.json "procedure", written by physician runs).
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "host_sim/evaluate/scoring.hpp"
+
+namespace scopekin::evaluate {
+
+/// A run folder that cannot be scored (a file missing or malformed): names the file and line.
+struct CaseDataError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+/// The box's period [s] (host_sim::kBoxPeriodUs).
+inline constexpr double kPeriod_s = 0.005;
+
+/// What a physician run reports (summary.json "procedure"; the physicians' contract): absent
+/// for runs that do not write it.
+struct ProcedureOutcome {
+    bool known = false;  ///< the summary has a "procedure" section
+    std::string kind;    ///< "physician" or "scripted"
+    std::string style;   ///< physician runs
+    std::optional<bool> cecum_reached;
+    std::optional<double> cecum_time_s;
+    std::optional<double> insertion_at_cecum_mm;
+};
+
+/// The truth and the box's outputs at each period, joined row by row (the same time_s text).
+struct CaseRun {
+    std::string status;          ///< summary.json "status": "complete" or "failed"
+    std::string message;         ///< summary.json "message"
+    double duration_s = 0;       ///< simulated
+    double wall_time_s = 0;      ///< of the simulation
+    std::vector<double> time_s;  ///< period release times
+    // truth.csv
+    std::vector<double> true_tip_path_mm;
+    std::vector<double> true_max_station_force_N;
+    std::vector<double> insertion_mm;  ///< true insertion
+    // summary.json "truth"
+    std::vector<Episode> loop_episodes, warning_episodes, critical_episodes;
+    // firmware.csv: the box's outputs
+    std::vector<double> box_tip_path_mm;
+    std::vector<double> box_max_contact_force_N;
+    std::vector<std::uint8_t> box_self_lock;
+    std::vector<std::uint8_t> box_contact_level;
+    std::vector<std::uint32_t> box_fault_flags;
+    // recording.csv: the handle force and insertion the box received, at each period (the last
+    // sample at or before the period's time; NaN before the first)
+    std::vector<double> handle_force_N;
+    std::vector<double> handle_insertion_mm;
+    /// The same, at every sensor sample (1 kHz): what the handle force monitor filters.
+    std::vector<double> sample_time_s, sample_force_N, sample_insertion_mm;
+    ProcedureOutcome procedure;
+};
+
+/// Reads a run folder written by `scopekin simulate`: summary.json, truth.csv, firmware.csv,
+/// recording.csv. Throws CaseDataError (a missing file, a missing column, rows that do not
+/// join, a cell that is not a number), naming the file and line.
+CaseRun read_case_run(const std::filesystem::path& folder);
+
+/// summary.json "procedure" (physicians' contract), or unknown.
+ProcedureOutcome read_procedure(const nlohmann::json& summary);
+
+/// A truth episode list (summary.json "truth": loop_episodes, or force_episodes' lists):
+/// onset_s, end_s (null: up at the end), and for loops "type" and "region".
+std::vector<Episode> read_episodes(const nlohmann::json& list, const std::string& where);
+
+}  // namespace scopekin::evaluate

@@ -1,0 +1,58 @@
+#include "host_sim/evaluate/estimators.hpp"
+
+#include "host_sim/simulator/box_observer.hpp"
+
+namespace scopekin::evaluate {
+namespace {
+
+/// (a) The firmware as it is today: the depth-indexed replay of the reduced model's training
+/// runs; its outputs are firmware.csv.
+EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext&) {
+    EstimatorOutput o;
+    o.tip_path_mm = run.box_tip_path_mm;
+    o.max_force_N = run.box_max_contact_force_N;
+    o.loop_alarm = run.box_self_lock;
+    o.contact_level = run.box_contact_level;
+    o.fault_flags = run.box_fault_flags;
+    return o;
+}
+
+/// (b) The handle force monitor (force_monitor.hpp): alarms only.
+EstimatorOutput handle_force_monitor(const CaseRun& run, const EstimatorContext& context) {
+    const ForceMonitorFeatures f = force_monitor_features(run);
+    const ForceMonitorThresholds& t = context.force_monitor;
+    EstimatorOutput o;
+    o.loop_alarm = force_monitor_loop_alarm(f, t.loop_force_N, t.loop_rate_N_per_s);
+    o.contact_level = force_monitor_contact_level(f, t);
+    return o;
+}
+
+}  // namespace
+
+const std::vector<Estimator>& estimator_registry() {
+    static const std::vector<Estimator> registry{
+        {"depth_replay", "today's estimator (depth replay)", depth_replay},
+        {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},
+    };
+    return registry;
+}
+
+std::vector<EstimatorOutput> estimator_outputs(const CaseRun& run,
+                                               const EstimatorContext& context) {
+    std::vector<EstimatorOutput> outputs;
+    for (const Estimator& e : estimator_registry())
+        outputs.push_back(e.outputs(run, context));
+    return outputs;
+}
+
+const std::vector<std::string>& fault_flag_names() {
+    static const std::vector<std::string> names = [] {
+        std::vector<std::string> n;
+        for (const char* name : host_sim::kinetics_fault_names())
+            n.emplace_back(name);
+        return n;
+    }();
+    return names;
+}
+
+}  // namespace scopekin::evaluate
