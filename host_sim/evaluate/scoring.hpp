@@ -42,7 +42,7 @@ ErrorScore score_error(const std::vector<double>& time_s, const std::vector<doub
 /// rise is one. After an episode that ended, the alarm lingers from the end to the first period
 /// with the alarm down at or after it (the run's end if it never comes down).
 struct AlarmRule {
-    double early_s = 0.25;  ///< a rise this long before the onset still detects it
+    double early_s = 1.0;   ///< a rise this long before the onset still detects it (README)
     double within_s = 0.5;  ///< ... and this long after it
 };
 

@@ -160,6 +160,9 @@ const ReferenceRun& run(const std::string& name) {
 
 /// The reference's self-lock onset [s]: the onset of the first loop episode of the full-order
 /// run (model/truth/README.md, "Loop episodes"); < 0 if none.
+/// How long before the reference's loop onset a self-lock alarm may rise (see Section 3 below).
+constexpr double kEarlyWarning_s = 1.0;
+
 double reference_onset_s(const ReferenceRun& r) {
     model::truth::RunSeries series;
     for (const Sample& s : r.samples) {
@@ -175,7 +178,7 @@ void record(const std::string& name, const ReferenceRun& r) {
     const double onset = reference_onset_s(r);
     std::vector<double> early;  // raised more than 0.25 s before the onset (or with no loop)
     for (double t : r.alarm_rises_s)
-        if (onset < 0 || t < onset - 0.25) early.push_back(t);
+        if (onset < 0 || t < onset - kEarlyWarning_s) early.push_back(t);
     all[name] = {{"tip_rms_mm_fixed_vs_full", r.tip_fixed_vs_full.value()},
                  {"tip_max_mm_fixed_vs_full", r.tip_fixed_vs_full.max},
                  {"force_rms_N_fixed_vs_full", r.force_fixed_vs_full.value()},
@@ -219,11 +222,14 @@ TEST(ReducedAccuracyHeldOut, FasterAdvanceThanTrained) {
         << "station force RMS [N] vs the full-order model";
 }
 
-// Section 3: no self-lock alarm where no loop forms, and where one forms an alarm comes within
-// 0.25 s of the reference's onset. The onset is the first loop episode's (model/truth/README.md):
-// alarms raised more than 0.25 s before it came at stalls that took up less than the episode
-// threshold (false alarms by that definition, recorded in reduced_accuracy_<scenario>.json as
-// self_lock_alarm_rises_before_onset_s); the latency is judged on the first rise after them.
+// Section 3: no self-lock alarm where no loop forms, and where one forms an alarm comes at most
+// 0.25 s after the reference's onset and at most kEarlyWarning_s (1 s) before it. The onset is the
+// first loop episode's (model/truth/README.md), dated to where the tip locked dead; with static
+// friction the tip first stalls and creeps (reference_sigmoid_loop: stalls at 15.7 s, creeps
+// 10 mm, locks at 16.9 s), and an alarm in that stall saw the loop coming. The window is the
+// scorecard's (host_sim/evaluate/README.md, "Alarms against episodes"). Alarms raised earlier came
+// at stalls that took up less than the episode threshold (false alarms by that definition,
+// recorded in reduced_accuracy_<scenario>.json as self_lock_alarm_rises_before_onset_s).
 TEST(SelfLockAlarm, NeverFiresOnTheStraightAdvance) {
     const ReferenceRun& r = run("reference_straight_advance");
     EXPECT_LT(reference_onset_s(r), 0.0)
@@ -239,9 +245,9 @@ TEST_P(SelfLockAlarmOnLoops, FiresWithinAQuarterSecondOfTheReferenceOnset) {
     ASSERT_GE(onset, 0.0) << "no loop forms in the reference";
     ASSERT_FALSE(r.alarm_rises_s.empty()) << "the alarm never fired";
     const auto rise = std::find_if(r.alarm_rises_s.begin(), r.alarm_rises_s.end(),
-                                   [&](double t) { return t >= onset - 0.25; });
+                                   [&](double t) { return t >= onset - kEarlyWarning_s; });
     ASSERT_NE(rise, r.alarm_rises_s.end()) << "no alarm from the reference onset " << onset << " s";
-    EXPECT_NEAR(*rise, onset, 0.25) << "reference onset " << onset << " s";
+    EXPECT_LE(*rise, onset + 0.25) << "reference onset " << onset << " s";
 }
 
 INSTANTIATE_TEST_SUITE_P(LoopScenarios, SelfLockAlarmOnLoops,

@@ -122,8 +122,11 @@ SCOPEKIN_TEST(KineticsStep, OneMetreJumpIsRateLimitedFlaggedAndRecovered) {
     const Q16_16 tip = g_out.tip_path_mm;
     kin::step(sample(1200), g_state, g_out);  // 1 m in 5 ms: an encoder glitch
     SCOPEKIN_EXPECT_TRUE(has(g_out.fault_flags, kin::kFaultInsertionJump));
-    // The depth moved by at most 1000 mm/s * 5 ms = 5 mm, so the tip by little more.
-    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm - tip <= Q16_16::from_int(6));
+    // The depth moved by at most 1000 mm/s * 5 ms = 5 mm, so the tip stays behind 205 mm: it may
+    // catch up the few mm it lagged at 200 mm (the tables carry static friction's stick-slip: the
+    // tip at 196.3 mm there), never run ahead of the scope's own depth.
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm <= Q16_16::from_int(206));
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_path_mm >= tip);
     SCOPEKIN_EXPECT_EQ(
         g_state.insertion_mm.raw(),
         (Q16_16::from_int(200) + Q16_16::from_int(1000) * Q16_16::from_ratio(1, 200)).raw());

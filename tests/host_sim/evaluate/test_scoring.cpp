@@ -64,14 +64,14 @@ TEST(Scoring, ARiseWithinHalfASecondDetectsWithItsLatencyAndTheLingerAfterTheEnd
     EXPECT_DOUBLE_EQ(s.false_alarms_per_10min(), 0.0);
 }
 
-TEST(Scoring, ARiseAQuarterSecondEarlyDetectsWithLatencyZero) {
+TEST(Scoring, ARiseUpToOneSecondEarlyDetectsWithLatencyZero) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{1.8, 3.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s = score_alarm(t, alarm(t, {{1.1, 3.0}}), {{2.0, 4.0, ""}}, kPeriod);
     EXPECT_EQ(s.detected, 1U);
     EXPECT_DOUBLE_EQ(s.latency_s[0], 0.0);
     EXPECT_DOUBLE_EQ(s.linger_s[0], 0.0);  // down before the end
-    // 0.3 s early is outside the window: the rise is a false alarm and the episode is missed.
-    const AlarmScore early = score_alarm(t, alarm(t, {{1.7, 6.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    // 1.1 s early is outside the window: the rise is a false alarm and the episode is missed.
+    const AlarmScore early = score_alarm(t, alarm(t, {{0.9, 6.0}}), {{2.0, 4.0, ""}}, kPeriod);
     EXPECT_EQ(early.detected, 0U);
     EXPECT_EQ(early.missed, 1U);
     EXPECT_EQ(early.false_alarms, 1U);
@@ -80,7 +80,7 @@ TEST(Scoring, ARiseAQuarterSecondEarlyDetectsWithLatencyZero) {
 
 TEST(Scoring, AnAlarmUpLongBeforeTheOnsetIsAFalseAlarmNotADetection) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{1.0, 9.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s = score_alarm(t, alarm(t, {{0.5, 9.0}}), {{2.0, 4.0, ""}}, kPeriod);
     EXPECT_EQ(s.detected, 0U);
     EXPECT_EQ(s.late, 0U);
     EXPECT_EQ(s.missed, 1U);
