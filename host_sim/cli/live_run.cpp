@@ -153,6 +153,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     world_stats["gs_sweeps_max"] = sum.gs_sweeps_max;
     world_stats["dropped_contacts_total"] = sum.dropped_contacts_total;
     world_stats["material_tangent_fallbacks"] = sum.material_tangent_fallbacks;
+    world_stats["under_relaxed_steps"] = sum.under_relaxed_steps;
     world_stats["max_penetration_mm"] = sum.max_penetration_mm;
     world_stats["friction_work_Nmm"] = sum.friction_work_Nmm;
     s["world"] = world_stats;

@@ -193,6 +193,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
         sum.gs_sweeps_max = std::max(sum.gs_sweeps_max, report.sweeps);
         sum.dropped_contacts_total += report.dropped_contacts;
         if (report.material_tangent_fallback) ++sum.material_tangent_fallbacks;
+        if (report.under_relaxed) ++sum.under_relaxed_steps;
         sum.max_penetration_mm = std::max(sum.max_penetration_mm, report.max_penetration_mm);
         sum.friction_work_Nmm += report.friction_work_Nmm;
         sum.max_handle_force_N = std::max(sum.max_handle_force_N, std::abs(world.handle_force_N()));

@@ -67,6 +67,7 @@ struct SimulationSummary {
     std::size_t gs_sweeps_max = 0;
     std::size_t dropped_contacts_total = 0;
     std::size_t material_tangent_fallbacks = 0;
+    std::size_t under_relaxed_steps = 0;  ///< steps whose contact solve cycled (World::step)
     double max_penetration_mm = 0;
     double friction_work_Nmm = 0;  ///< sum over steps and contacts of f_T . slip (<= 0: dissipated)
     Eigen::Vector3d final_tip_mm = Eigen::Vector3d::Zero();

@@ -154,6 +154,7 @@ struct WorldStepReport {
         0;  ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
     bool material_tangent_fallback =
         false;                 ///< the full tangent failed; the step used the material one
+    bool under_relaxed = false;  ///< Gauss-Seidel cycled; the step was solved under-relaxed
     std::size_t substeps = 1;  ///< 1, or 2^k when the full tangent needed k halvings of the step
 };
 
@@ -252,8 +253,11 @@ private:
     HandleCommand halfway_command(const HandleCommand& command) const;
     WorldStepReport attempt(const HandleCommand& command, bool geometric_tangent, double h,
                             double t_start_s);
+    /// The last resort of World::step: the step again with Gauss-Seidel under-relaxed.
+    WorldStepReport attempt_under_relaxed(const HandleCommand& command);
 
     WorldSettings settings_;
+    double relaxation_ = 1.0;  // Gauss-Seidel's omega for this attempt (settings_ unless retried)
     std::vector<std::shared_ptr<const WorldEffect>> effects_;
     Eigen::Matrix3d rotation_ = Eigen::Matrix3d::Identity();  // body -> computation
     Eigen::Vector3d anus_ = Eigen::Vector3d::Zero();          // body frame
