@@ -153,9 +153,9 @@ struct WorldStepReport {
     double friction_work_Nmm =
         0;  ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
     bool material_tangent_fallback =
-        false;                 ///< the full tangent failed; the step used the material one
+        false;                   ///< the full tangent failed; the step used the material one
     bool under_relaxed = false;  ///< Gauss-Seidel cycled; the step was solved under-relaxed
-    std::size_t substeps = 1;  ///< 1, or 2^k when the full tangent needed k halvings of the step
+    std::size_t substeps = 1;    ///< 1, or 2^k when the full tangent needed k halvings of the step
 };
 
 class World {
