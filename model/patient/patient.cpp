@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "model/colon/colon_beam.hpp"
+#include "model/colon/straightened_path.hpp"
 #include "model/io/strict_json.hpp"
 #include "model/model_error.hpp"
 #include "model/patient/patient_random.hpp"
@@ -480,6 +481,7 @@ PatientMeasures measure_patient(const PatientSpec& p) {
     for (std::size_t i = r1 + 1; i < points.size(); ++i)
         m.lowest_y_mm = std::min(m.lowest_y_mm, points[i].position_mm.y());
     (void)r0;
+    m.straightened_path_mm = straightened_path_mm(points, patient_colon_properties(p));
     return m;
 }
 

@@ -108,6 +108,9 @@ struct PatientMeasures {
     double hepatic_flexure_angle_deg = 0;
     double smallest_bend_radius_mm = 0;
     double lowest_y_mm = 0;  ///< lowest point cranial of the anus (y, mm)
+    /// The scope's path to the cecal pole with the mobile regions drawn straight
+    /// (model/colon/straightened_path.hpp): the least insertion at the cecum pleating gives [mm].
+    double straightened_path_mm = 0;
 };
 PatientMeasures measure_patient(const PatientSpec& p);
 

@@ -676,6 +676,11 @@ def check_patients():
     expect(listed["count"] == 6 and [x["seed"] for x in listed["patients"]] == list(range(10, 16)),
            "patients.json lists the six")
     expect(listed["redraws"] == sum(int(r["redraws"]) for r in table), "redraws add up")
+    # The straightened path: shorter than the colon (every patient has a mobile sigmoid), printed.
+    expect(all(0 < float(r["straightened_path_mm"]) < float(r["total_length_mm"]) for r in table),
+           "straightened_path_mm is shorter than the colon in every row")
+    expect("straightened path to the cecum" in p.stdout and "of 6 under 1330 mm" in p.stdout,
+           f"patients prints the straightened path's distribution: {p.stdout}")
     checker = os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py")
     c = subprocess.run(["/usr/bin/python3", checker, os.path.join(g, "gallery.png")], capture_output=True, text=True)
     expect(c.returncode == 0, "the gallery is a non-trivial PNG: " + c.stdout + c.stderr)
