@@ -232,6 +232,23 @@ WorldContactSettings read_contact(const JsonObject& o) {
     return c;
 }
 
+/// "telescoping": the colon's mobile stretches pleat onto the scope (model/colon/colon_pleating.hpp).
+TelescopingLaw read_telescoping(const JsonObject& o) {
+    o.allow_only({"enabled", "onset_drag_N", "stiffening_drag_N", "recoil_time_s", "rate_per_N_s",
+                  "max_fraction"});
+    TelescopingLaw t;
+    t.enabled = o.boolean_or("enabled", t.enabled);
+    t.onset_drag_N = non_negative_or(o, "onset_drag_N", t.onset_drag_N);
+    t.stiffening_drag_N = positive_or(o, "stiffening_drag_N", t.stiffening_drag_N);
+    t.recoil_time_s = positive_or(o, "recoil_time_s", t.recoil_time_s);
+    t.rate_per_N_s = positive_or(o, "rate_per_N_s", t.rate_per_N_s);
+    t.max_fraction = o.number_or("max_fraction", t.max_fraction);
+    if (!(t.max_fraction >= 0.0 && t.max_fraction < 1.0))
+        throw ModelError(o.field("max_fraction") + ": " + number_text(t.max_fraction) +
+                         " must be in [0, 1)");
+    return t;
+}
+
 void read_solver(const JsonObject& o, WorldSettings& s) {
     o.allow_only({"time_step_s", "newton_iterations", "damping", "contact"});
     s.time_step_s = positive_or(o, "time_step_s", s.time_step_s);
@@ -430,7 +447,8 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
     sc.kind = ScenarioKind::world;
     root.allow_only({"description", "colon", "colon_regions", "scope", "gravity_mm_per_s2",
                      "initial_insertion_mm", "solver", "procedure", "outputs", "truth_effects",
-                     "sensors", "steering", "abdominal_pressure", "patient", "physician"});
+                     "sensors", "steering", "abdominal_pressure", "patient", "physician",
+                     "telescoping"});
     sc.scope = read_scope(root.object("scope"), sc.scope_model);
     if (patient) {
         const JsonObject key = root.object("patient");
@@ -484,6 +502,8 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
         root.vector3_or("gravity_mm_per_s2", sc.settings.gravity_mm_per_s2);
     if (with_run) set_initial_insertion(sc, non_negative_or(root, "initial_insertion_mm", 0.0));
     if (root.has("solver")) read_solver(root.object("solver"), sc.settings);
+    if (root.has("telescoping"))
+        sc.settings.telescoping = read_telescoping(root.object("telescoping"));
     if (sc.patient) {
         const nlohmann::json* contact = root.has("solver") && root.raw("solver").contains("contact")
                                             ? &root.raw("solver").at("contact")

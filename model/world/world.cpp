@@ -60,6 +60,7 @@ void WorldSettings::validate() const {
     if (!gravity_mm_per_s2.allFinite()) throw ModelError("gravity_mm_per_s2: not finite");
     require_non_negative(initial_insertion_mm, "initial_insertion_mm");
     contact.validate();
+    telescoping.validate();
 }
 
 World::World(const ScopeSpec& scope, const ColonTube& colon,
@@ -96,7 +97,12 @@ World::World(const ScopeSpec& scope, const ColonTube& colon,
     std::array<ColonRegionProperties, 8> colon_properties = properties;
     for (const auto& e : effects_)
         e->adjust_colon_properties(colon_properties);
-    compliance_ = std::make_unique<ColonCompliance>(build_colon_structure(tube_, colon_properties));
+    const ColonStructure structure = build_colon_structure(tube_, colon_properties);
+    compliance_ = std::make_unique<ColonCompliance>(structure);
+    pleating_ =
+        std::make_unique<ColonPleating>(colon_rest_mm_, structure.mobile, settings_.telescoping);
+    pleated_tube_mm_ = colon_rest_mm_;
+    colon_rest_at_start_mm_ = colon_rest_mm_;
 
     std::vector<BeamSection> sections(scope.elements, scope.section);
     for (const auto& e : effects_)
@@ -173,6 +179,8 @@ World::State World::state() const {
     s.wall_deflection_mm = wall_deflection_mm_;
     s.contact_force_N = contact_force_N_;
     s.tracking = tracking_;
+    s.telescoping = pleating_->state();
+    s.pleated_tube_mm = pleated_tube_mm_;
     return s;
 }
 
@@ -208,6 +216,38 @@ void World::restore(const State& saved) {
     wall_deflection_mm_ = saved.wall_deflection_mm;
     contact_force_N_ = saved.contact_force_N;
     tracking_ = saved.tracking;
+    pleating_->restore(saved.telescoping);
+    colon_rest_mm_ = saved.telescoping.position_mm;
+    if (saved.pleated_tube_mm.size() != colon_rest_mm_.size())
+        throw ModelError("restore: the saved state is of another colon (pleated tube)");
+    pleated_tube_mm_ = saved.pleated_tube_mm;
+    pleated_body_tube_.reset();
+    if (pleated_tube_mm_ != colon_rest_at_start_mm_) refresh_pleated_tube(true);
+}
+
+void World::refresh_pleated_tube(bool always) {
+    // The effects that press the colon back to its place (abdominal pressure) see it pleated. The
+    // tube is rebuilt (its checks are O(points^2)) only once a node has moved kTubeRefresh_mm
+    // since the last one, and never without effects; the positions it was built from are part of
+    // the state, so a restored run continues bit for bit.
+    if (effects_.empty()) return;
+    const std::vector<Eigen::Vector3d>& from = always ? pleated_tube_mm_ : colon_rest_mm_;
+    if (!always) {
+        double moved_mm = 0.0;
+        for (std::size_t i = 0; i < colon_rest_mm_.size(); ++i)
+            moved_mm = std::max(moved_mm, (colon_rest_mm_[i] - pleated_tube_mm_[i]).norm());
+        if (moved_mm < kTubeRefresh_mm) return;
+    }
+    std::vector<ColonPoint> points = body_tube_.points();
+    for (std::size_t i = 0; i < points.size() && i < from.size(); ++i)
+        points[i].position_mm = to_body(from[i]);
+    try {
+        pleated_body_tube_ =
+            std::make_unique<ColonTube>(body_tube_.name(), std::move(points), scope_radius_mm_);
+        pleated_tube_mm_ = from;
+    } catch (const ModelError&) {
+        // A pleated shape the tube's checks refuse: the effects keep the last one that passed.
+    }
 }
 
 Eigen::Vector3d World::colon_position_mm(std::size_t node) const {
@@ -284,6 +324,12 @@ WorldStepReport World::step(const HandleCommand& command) {
     }
     ++steps_taken_;
     time_s_ = static_cast<double>(steps_taken_) * h;  // no drift from summing h
+    // Telescoping, staggered: the drag of this step's contact forces pleats the mobile stretches;
+    // the next step's contacts meet the colon in its new rest shape.
+    if (pleating_->advance(colon_forces_, h)) {
+        colon_rest_mm_ = pleating_->state().position_mm;
+        refresh_pleated_tube(false);
+    }
     return report;
 }
 
@@ -390,7 +436,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         view.time_step_s = h;
         view.insertion_depth_mm = insertion_depth_mm();
         view.scope_radius_mm = scope_radius_mm_;
-        view.colon_at_rest = &body_tube_;
+        view.colon_at_rest = pleated_body_tube_ ? pleated_body_tube_.get() : &body_tube_;
         view.scope_node_held = held;
         for (std::size_t k = 0; k < nodes; ++k) {
             view.scope_nodes_mm.push_back(node_position_mm(k));
@@ -599,9 +645,17 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
                 colon_last += compliance_->point_block(ca.colon_segment, ca.colon_weight, f.segment,
                                                        f.weight) *
                               f.force_N;
+            // The wall also moved with the last pleating of the colon (telescoping drags the
+            // wall along; a sticking scope goes with it). It happened before the step's first part.
+            const auto& pleat_motion = pleating_->state().last_motion_mm;
+            const Eigen::Vector3d pleated =
+                t_start_s != time_s_
+                    ? Eigen::Vector3d::Zero()
+                    : Eigen::Vector3d((1.0 - ca.colon_weight) * pleat_motion[ca.colon_segment] +
+                                      ca.colon_weight * pleat_motion[ca.colon_segment + 1]);
             const Eigen::Vector3d relative = scope_.position(ca.scope_node) -
                                              start.positions[ca.scope_node] + colon_last +
-                                             wall_deflection_mm_[ca.scope_node];
+                                             wall_deflection_mm_[ca.scope_node] - pleated;
             // delta = W f + delta_free with the carried forces' scope response taken out: the
             // free motion above already holds it (W f_carried, scope part).
             problem.free_displacement[a] = {ca.gap_mm - carried_response.x(),

@@ -31,6 +31,7 @@
 #include "contact/gauss_seidel_contact.hpp"  // firmware/: the one Gauss-Seidel solver
 #include "model/beam/scope_beam.hpp"
 #include "model/colon/colon_compliance.hpp"
+#include "model/colon/colon_pleating.hpp"
 #include "model/colon/colon_tube.hpp"
 #include "model/contact/contact_detection.hpp"
 #include "model/linalg/selected_inverse.hpp"
@@ -86,6 +87,8 @@ struct WorldSettings {
     double initial_insertion_mm =
         0.0;  ///< scope past the anus at t = 0, straight on the entry axis
     WorldContactSettings contact;
+    TelescopingLaw
+        telescoping;  ///< the mobile stretches pleat along the scope (colon_pleating.hpp)
     void validate() const;
 };
 
@@ -194,6 +197,8 @@ public:
     /// One of them (cheaper than all).
     Eigen::Vector3d colon_position_mm(std::size_t node) const;
     const ColonTube& colon() const { return body_tube_; }
+    /// Telescoping: the pleated fraction of each mobile stretch (colon_pleating.hpp).
+    const ColonPleating& telescoping() const { return *pleating_; }
     /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
     const ScopeBeam& scope_computation_frame() const { return scope_; }
     /// The given scope nodes (strictly increasing) against the colon in its current shape: where
@@ -225,6 +230,8 @@ public:
         std::vector<Eigen::Vector3d> wall_deflection_mm;
         std::vector<Eigen::Vector3d> contact_force_N;
         CenterlineTracking tracking;
+        ColonPleating::State telescoping;
+        std::vector<Eigen::Vector3d> pleated_tube_mm;  ///< the effects' view of the pleated colon
     };
     State state() const;
     /// Continues from `saved`. Throws ModelError when it is another scope's or colon's (node counts
@@ -265,6 +272,12 @@ private:
     ColonTube tube_;  // computation frame
     std::vector<Eigen::Vector3d> colon_rest_mm_;
     std::unique_ptr<ColonCompliance> compliance_;
+    std::unique_ptr<ColonPleating> pleating_;       // the rest shape of the mobile stretches
+    std::unique_ptr<ColonTube> pleated_body_tube_;  // body frame, for effects; null = unpleated
+    std::vector<Eigen::Vector3d> pleated_tube_mm_;  // the rest shape it was built from
+    std::vector<Eigen::Vector3d> colon_rest_at_start_mm_;  // unpleated
+    static constexpr double kTubeRefresh_mm = 1.0;
+    void refresh_pleated_tube(bool always);
     ScopeBeam scope_;
     double length_mm_ = 0;
     double scope_radius_mm_ = 0;

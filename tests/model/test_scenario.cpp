@@ -84,6 +84,7 @@ TEST(ScenarioReader, Defaults) {
     EXPECT_EQ(s.scope.section.bending_stiffness_y_Nmm2, 35000.0);
     EXPECT_EQ(s.settings.time_step_s, 0.01);
     EXPECT_EQ(s.settings.newton_iterations, 1);
+    EXPECT_FALSE(s.settings.telescoping.enabled);  // off unless a scenario asks for it
     // Thesis Eq. 4.15 in the Hz convention: a' = 2 pi 0.3864, b' = 0.0164 / (2 pi).
     EXPECT_NEAR(s.settings.damping.mass_coefficient_per_s, 2.0 * M_PI * 0.3864, 1e-12);
     EXPECT_NEAR(s.settings.damping.stiffness_coefficient_s, 0.0164 / (2.0 * M_PI), 1e-12);
@@ -121,7 +122,16 @@ TEST(ScenarioReader, EverySettingIsRead) {
                   "max_sweeps": 500, "relaxation": 1.2}})");
     doc["outputs"] = nlohmann::json::parse(
         R"({"sample_rate_Hz": 100, "nodes_from_tip_mm": [0, 200], "contacts_file": true})");
+    doc["telescoping"] = nlohmann::json::parse(
+        R"({"enabled": true, "onset_drag_N": 2, "stiffening_drag_N": 3, "recoil_time_s": 10,
+            "rate_per_N_s": 0.5, "max_fraction": 0.4})");
     const Scenario s = read_scenario(doc, "s.json");
+    EXPECT_TRUE(s.settings.telescoping.enabled);
+    EXPECT_EQ(s.settings.telescoping.onset_drag_N, 2.0);
+    EXPECT_EQ(s.settings.telescoping.stiffening_drag_N, 3.0);
+    EXPECT_EQ(s.settings.telescoping.recoil_time_s, 10.0);
+    EXPECT_EQ(s.settings.telescoping.rate_per_N_s, 0.5);
+    EXPECT_EQ(s.settings.telescoping.max_fraction, 0.4);
     EXPECT_EQ(s.scope.length_mm, 500.0);
     EXPECT_EQ(s.scope.elements, 50u);
     EXPECT_EQ(s.scope.radius_mm, 6.0);
@@ -313,6 +323,18 @@ TEST(ScenarioReader, BadNumbersAreRejected) {
     doc = base();
     doc["solver"] = {{"contact", {{"friction_coefficient", -0.1}}}};
     expect_error(doc, {"solver.contact.friction_coefficient"});
+    doc = base();
+    doc["telescoping"] = {{"max_fraction", 1.0}};
+    expect_error(doc, {"s.json: telescoping.max_fraction", "[0, 1)"});
+    doc = base();
+    doc["telescoping"] = {{"onset_drag_N", -1}};
+    expect_error(doc, {"telescoping.onset_drag_N"});
+    doc = base();
+    doc["telescoping"] = {{"enabled", "yes"}};
+    expect_error(doc, {"telescoping.enabled"});
+    doc = base();
+    doc["telescoping"] = {{"pleats", 3}};
+    expect_error(doc, {"telescoping", "pleats"});
     doc = base();
     doc["outputs"] = {{"sample_rate_Hz", 200}};
     expect_error(doc, {"outputs.sample_rate_Hz", "above the step rate"});
