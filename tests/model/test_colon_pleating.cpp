@@ -51,6 +51,13 @@ std::vector<ColonPointForce> drag_on_loop(const ColonPleating& pleating, double 
     return forces;
 }
 
+/// `seconds` of a constant `drag_N` towards the anus in steps of 10 ms.
+void drag_for(ColonPleating& pleating, double drag_N, double seconds) {
+    const auto steps = static_cast<int>(std::lround(seconds / 0.01));
+    for (int n = 0; n < steps; ++n)
+        pleating.advance(drag_on_loop(pleating, drag_N), 0.01);
+}
+
 /// The default law (D_0 1 N, D_h 2 N, tau 30 s), switched on (it is off unless asked for).
 TelescopingLaw law() {
     TelescopingLaw l;
@@ -87,9 +94,7 @@ TEST(ColonPleating, ConstantDragSettlesWhereItMeetsTheResistance) {
     // D = 4 N: q* = (4 - 1) / (4 - 1 + 2) = 0.6 of p_max.
     const Colon c = half_circle_colon();
     ColonPleating pleating(c.nodes, c.mobile, law());
-    const double h_s = 0.01;
-    for (int n = 0; n < 6000; ++n)
-        pleating.advance(drag_on_loop(pleating, 4.0), h_s);
+    drag_for(pleating, 4.0, 60.0);
     EXPECT_NEAR(pleating.state().fraction[0], 0.6 * pleating.max_fraction(0), 1e-4);
     EXPECT_NEAR(pleating.length_now_mm(0), (1.0 - pleating.state().fraction[0]) * kLoopLength_mm,
                 1e-6);
@@ -107,20 +112,17 @@ TEST(ColonPleating, BelowTheOnsetNothingPleats) {
 TEST(ColonPleating, TheScopeHoldsThePleatsWhilePushedTowardsTheCecum) {
     const Colon c = half_circle_colon();
     ColonPleating pleating(c.nodes, c.mobile, law());
-    for (int n = 0; n < 2000; ++n)
-        pleating.advance(drag_on_loop(pleating, 4.0), 0.01);
+    drag_for(pleating, 4.0, 20.0);
     const double held = pleating.state().fraction[0];
     ASSERT_GT(held, 0.1);
-    for (int n = 0; n < 1000; ++n)  // 10 s of a 5 N push on towards the cecum
-        pleating.advance(drag_on_loop(pleating, -5.0), 0.01);
+    drag_for(pleating, -5.0, 10.0);  // a 5 N push on towards the cecum
     EXPECT_EQ(pleating.state().fraction[0], held);
 }
 
 TEST(ColonPleating, AnUnloadedStretchRecoilsWithItsTimeConstant) {
     const Colon c = half_circle_colon();
     ColonPleating pleating(c.nodes, c.mobile, law());
-    for (int n = 0; n < 2000; ++n)
-        pleating.advance(drag_on_loop(pleating, 4.0), 0.01);
+    drag_for(pleating, 4.0, 20.0);
     const double p0 = pleating.state().fraction[0];
     for (int n = 0; n < 1000; ++n)  // 10 s, no contact
         pleating.advance({}, 0.01);
