@@ -268,8 +268,9 @@ int run_evaluate(const EvaluateOptions& options) {
         const fs::path dir(options.out);
         const std::string shard_name = shard_file_name(shard, shards);
         if (shards == 1)
-            prepare_directory(dir, {"scorecard.json", shard_name.c_str(), "scorecard.csv",
-                                    "scorecard.md", "distributions.png", "worst_cases.png"});
+            prepare_directory(
+                dir, {"scorecard.json", shard_name.c_str(), "scorecard.csv", "scorecard.md",
+                      "distributions.png", "worst_cases.png", "procedures.png"});
         else
             prepare_directory(dir, {shard_name.c_str()});
         const auto start = std::chrono::steady_clock::now();
@@ -422,7 +423,7 @@ int run_merge(const MergeOptions& options) {
     header["run"] = {{"wall_s_summed_over_shards", wall}, {"simulated_s", simulated}};
     try {
         prepare_directory(out, {"scorecard.json", "scorecard.csv", "scorecard.md",
-                                "distributions.png", "worst_cases.png"});
+                                "distributions.png", "worst_cases.png", "procedures.png"});
         write_overall(out, header, cases, options.plots);
     } catch (const OutputError& e) {
         std::cerr << "scopekin evaluate-merge: " << e.what() << "\n";
@@ -521,7 +522,9 @@ void add_evaluate_commands(CLI::App& app) {
         "(detected within 0.5 s, latency, missed, false alarms per 10 min, time up after the "
         "end), fault flag shares. Writes DIR/cases/NAME/score.json and estimates.csv, "
         "DIR/scorecard_shard_I_of_N.json and, unsharded, DIR/scorecard.json, scorecard.csv (one "
-        "row per case x estimator), scorecard.md (the table, also printed) and two PNGs. A case "
+        "row per case x estimator), scorecard.md (the table, also printed) and two PNGs (a third, "
+        "procedures.png, the insertion at cecal intubation per style, when the set has physician "
+        "cases). A case "
         "belongs to shard FNV-1a-64(its name) mod N; combine shards with `scopekin "
         "evaluate-merge`. Exit status 0 every case ran and was scored, 1 a case failed or could "
         "not be scored (listed in the scorecard), 2 invalid manifest or option (nothing run), 3 "

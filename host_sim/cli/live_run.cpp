@@ -154,6 +154,14 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     world_stats["dropped_contacts_total"] = sum.dropped_contacts_total;
     world_stats["material_tangent_fallbacks"] = sum.material_tangent_fallbacks;
     world_stats["under_relaxed_steps"] = sum.under_relaxed_steps;
+    Json pleats = Json::array();
+    for (const model::StretchPleating& k : sum.telescoping)
+        pleats.push_back({{"region", std::string(model::region_name(k.region))},
+                          {"rest_length_mm", k.rest_length_mm},
+                          {"max_fraction", k.max_fraction},
+                          {"peak_fraction", k.peak_fraction},
+                          {"final_fraction", k.final_fraction}});
+    world_stats["telescoping"] = pleats;
     world_stats["max_penetration_mm"] = sum.max_penetration_mm;
     world_stats["friction_work_Nmm"] = sum.friction_work_Nmm;
     s["world"] = world_stats;

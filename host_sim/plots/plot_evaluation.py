@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Draw the plots of a scorecard written by `scopekin evaluate`: DIR/distributions.png and
-DIR/worst_cases.png.
+"""Draw the plots of a scorecard written by `scopekin evaluate`: DIR/distributions.png,
+DIR/worst_cases.png and, when the set has physician cases, DIR/procedures.png.
 
 Usage: plot_evaluation.py DIR [--scorecard FILE] [--quiet]
 
@@ -12,6 +12,9 @@ worst_cases.png: the three worst cases (scorecard.json "overall.worst_cases": by
 estimator's tip error), one column each, from the case's estimates.csv: the true and estimated
 tip along the colon; the true loop episodes (shaded) with each estimator's loop alarm; the
 true largest station force with the estimated one and each estimator's contact level.
+procedures.png (physician cases only): the insertion at cecal intubation, a histogram per style
+(100 mm bins, stacked) with the 1,330 mm of an intermediate colonoscope marked, and each style's
+cecal intubation rate in the legend; without physician cases an older procedures.png is removed.
 The scorecard is read from FILE (`scopekin evaluate` draws the plots from scorecard.json.part,
 which it renames last). Each PNG is written as NAME.part, then renamed. Exit status: 0 ok, 2 a
 missing or malformed input (the message names the file and line), 3 an output that cannot be
@@ -194,6 +197,40 @@ def plot_worst(directory, scorecard, path):
     save(fig, path)
 
 
+def plot_procedures(scorecard, path):
+    """The insertion at cecal intubation per style (scorecard.json cases[].procedure)."""
+    by_style = {}
+    for c in scorecard.get("cases", []):
+        p = c.get("procedure")
+        if not isinstance(p, dict) or p.get("kind") != "physician":
+            continue
+        style = c.get("style") or "?"
+        entry = by_style.setdefault(style, {"cases": 0, "insertions": []})
+        entry["cases"] += 1
+        if p.get("cecum_reached") and isinstance(p.get("insertion_at_cecum_mm"), (int, float)):
+            entry["insertions"].append(float(p["insertion_at_cecum_mm"]))
+    if not by_style:
+        if os.path.exists(path):
+            os.remove(path)
+        return False
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), dpi=DPI)
+    bins = list(range(500, 1800 + 1, 100))
+    styles = sorted(by_style)
+    data = [by_style[s]["insertions"] for s in styles]
+    labels = [f"{s}: {len(by_style[s]['insertions'])} of {by_style[s]['cases']} reached the cecum"
+              for s in styles]
+    ax.hist(data, bins=bins, stacked=True, label=labels, color=COLOURS[:len(styles)], edgecolor="white")
+    ax.axvline(1330, color="black", linestyle="--", linewidth=1)
+    ax.text(1335, ax.get_ylim()[1] * 0.95, "1,330 mm\n(intermediate scope)", fontsize=7, va="top")
+    ax.set_xlim(bins[0], bins[-1])
+    ax.set_xlabel("insertion at cecal intubation [mm]")
+    ax.set_ylabel("cases")
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_title("Insertion at cecal intubation, per physician style", fontsize=10)
+    save(fig, path)
+    return True
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="plot_evaluation.py",
                                  description="Plot a scorecard: distributions.png and worst_cases.png in DIR.")
@@ -213,6 +250,9 @@ def main(argv=None):
         outputs = [os.path.join(args.directory, "distributions.png"), os.path.join(args.directory, "worst_cases.png")]
         plot_distributions(args.directory, scorecard, outputs[0])
         plot_worst(args.directory, scorecard, outputs[1])
+        procedures = os.path.join(args.directory, "procedures.png")
+        if plot_procedures(scorecard, procedures):
+            outputs.append(procedures)
         if not args.quiet:
             for p in outputs:
                 print(f"plot_evaluation: wrote {p} ({os.path.getsize(p)} bytes)")

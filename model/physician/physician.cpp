@@ -56,12 +56,15 @@ PhysicianStyleParameters physician_style_parameters(PhysicianStyle style) {
             p.jiggle_frequency_Hz = 1.0;
             p.jiggle_cycles = 2;
             p.torque_probability = 0.2;
+            p.steering_gain = 0.5;  // half-hearted angulation
+            p.steering_follows_turn = false;
             p.loop_notice_excess_mm = 0;  // pushes on
             p.loop_reduce_excess_mm = 100;
             p.resistance_N = 45;
             p.max_push_N = 60;
             p.discomfort_N = 0;
             p.reaction_s = 2.0;
+            p.resistance_with_lag_reduces = false;  // pushes on
             p.withdraw_speed_mm_per_s = 25;
             p.min_withdraw_mm = 30;
             p.max_withdraw_mm = 200;
@@ -88,6 +91,7 @@ PhysicianStyleParameters physician_style_parameters(PhysicianStyle style) {
             p.discomfort_N = 0;
             p.reaction_s = 0.5;
             p.reduces_loops = false;
+            p.resistance_with_lag_reduces = false;
             p.pressure_from_reduction = 0;
             p.max_reductions = 0;
             p.stall_give_up_s = 30;
@@ -250,13 +254,16 @@ HandDecision Physician::decide(const PhysicianObservation& seen, double h_s) {
         const bool resist = seen.handle_force_N >= p_.resistance_N ||
                             (p_.discomfort_N > 0.0 && seen.max_wall_force_N >= p_.discomfort_N);
         const bool all_in = depth_mm_ >= cap_mm - 1e-9;
+        const bool resisted_loop = p_.resistance_with_lag_reduces && resist &&
+                                   p_.loop_notice_excess_mm > 0.0 &&
+                                   excess_mm_ >= p_.loop_notice_excess_mm;
         const bool trigger = loop || lagging || resist || all_in;
         if (excess_mm_ < 0.5 * p_.loop_notice_excess_mm) jiggled_ = false;  // keeps pace again
         if (advancing && trigger && !noticed_s_) noticed_s_ = t;
         if (noticed_s_ && !trigger) noticed_s_.reset();  // the tip caught up before the reaction
         if (noticed_s_ && t - *noticed_s_ >= p_.reaction_s - kEps_s) {
             noticed_s_.reset();
-            if (p_.reduces_loops && (loop || all_in)) {
+            if (p_.reduces_loops && (loop || all_in || resisted_loop)) {
                 if (reductions_ >= p_.max_reductions)
                     give_up("a loop again after " + std::to_string(reductions_) +
                             " loop reductions");

@@ -64,7 +64,8 @@ struct PhysicianStyleParameters {
     double torque_range_deg = 90;
     // Tip steering down the lumen (tip_steering.hpp) while advancing, pausing and jiggling.
     bool steers = true;
-    double steering_gain = 0.5;
+    double steering_gain = 1.0;         ///< the expert angulates the tip fully into the lumen
+    bool steering_follows_turn = true;  ///< ... and around a flexure (tip_steering.hpp)
     // What makes the hand stop pushing.
     /// Scope taken up while the tip did not follow (the loop watch): at the first threshold the
     /// hand jiggles (once, until the tip keeps pace again; 0 = never), at the second it reduces.
@@ -77,6 +78,10 @@ struct PhysicianStyleParameters {
     double give_way_speed_mm_per_s = 20;
     double discomfort_N = 20;  ///< largest wall force (the patient's discomfort); 0 = none
     double reaction_s = 0.5;   ///< from noticing to acting
+    /// Resistance felt while the tip lags (excess >= the lag threshold) is taken for a loop: the
+    /// hand reduces instead of pausing and pushing again (a push that does not move the tip is a
+    /// loop: the 1:1 rule).
+    bool resistance_with_lag_reduces = true;
     // Loop reduction: turn clockwise, withdraw until the tip comes back with the hand.
     bool reduces_loops = true;
     double reduce_roll_deg =

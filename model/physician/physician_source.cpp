@@ -67,6 +67,7 @@ PhysicianSource::PhysicianSource(const World& world, const PhysicianSpec& spec,
     if (!control_) throw ModelError("physician: no scene control");
     *control_ = SceneControl{};
     control_->steering_gain = physician_.parameters().steering_gain;
+    control_->steering_follows_turn = physician_.parameters().steering_follows_turn;
     state_.roll_deg = world.roll_rad() * 180.0 / M_PI;
 }
 

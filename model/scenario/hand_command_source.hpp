@@ -25,6 +25,10 @@ struct SceneControl {
     double steering_lookahead_mm = 40.0;
     double steering_bending_section_mm = 80.0;
     double steering_gain = 0.5;
+    /// Aim along the turn: the tip is bent towards the mean of the direction to the centerline
+    /// point ahead and the centerline's own direction there (tip_steering.hpp), so that it
+    /// follows a tight flexure instead of pointing at its outer wall.
+    bool steering_follows_turn = false;
     /// Per region (kColonRegionsInOrder order): since when the assistant presses there [s], or
     /// empty while not pressing. Each region's firmness rises linearly over `pressure_ramp_s`
     /// from that time (a hand pressed in, as AbdominalPressureWindow::ramp_s).

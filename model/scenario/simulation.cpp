@@ -71,6 +71,24 @@ WorldRow sample_world(const World& world, const WorldStepReport* last_step,
 
 namespace {
 
+/// Keeps each mobile stretch's peak and latest pleated fraction (summary.json world.telescoping).
+void note_pleating(const World& world, std::vector<StretchPleating>& stretches) {
+    const ColonPleating& pleating = world.telescoping();
+    if (stretches.size() != pleating.stretch_count()) {
+        stretches.assign(pleating.stretch_count(), StretchPleating{});
+        for (std::size_t k = 0; k < stretches.size(); ++k) {
+            stretches[k].region = world.colon().points()[pleating.first_node(k)].region;
+            stretches[k].rest_length_mm = pleating.rest_length_mm(k);
+            stretches[k].max_fraction = pleating.max_fraction(k);
+        }
+    }
+    for (std::size_t k = 0; k < stretches.size(); ++k) {
+        const double p = pleating.state().fraction[k];
+        stretches[k].final_fraction = p;
+        stretches[k].peak_fraction = std::max(stretches[k].peak_fraction, p);
+    }
+}
+
 /// A scripted procedure's player, watching the tip's arrival at the cecum as a physician would
 /// see it (WorldObserver) and telling what the hand does (procedure.csv).
 class ScriptedSource final : public HandCommandSource {
@@ -194,6 +212,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
         sum.dropped_contacts_total += report.dropped_contacts;
         if (report.material_tangent_fallback) ++sum.material_tangent_fallbacks;
         if (report.under_relaxed) ++sum.under_relaxed_steps;
+        note_pleating(world, sum.telescoping);
         sum.max_penetration_mm = std::max(sum.max_penetration_mm, report.max_penetration_mm);
         sum.friction_work_Nmm += report.friction_work_Nmm;
         sum.max_handle_force_N = std::max(sum.max_handle_force_N, std::abs(world.handle_force_N()));
@@ -253,6 +272,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
     sum.real_time_factor = sum.wall_time_s > 0.0 ? sum.simulated_time_s / sum.wall_time_s : 0.0;
     sum.gs_sweeps_mean =
         sum.steps > 0 ? static_cast<double>(sweeps_total) / static_cast<double>(sum.steps) : 0.0;
+    note_pleating(world, sum.telescoping);
     sum.final_tip_mm = world.node_position_mm(world.scope_node_count() - 1);
     sum.final_insertion_depth_mm = world.insertion_depth_mm();
     sum.final_roll_deg = world.roll_rad() * kDegPerRad;

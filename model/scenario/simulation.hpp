@@ -48,6 +48,15 @@ struct SimulationProgress {
     double handle_force_N = 0;
 };
 
+/// One mobile stretch's telescoping over a run (summary.json world.telescoping).
+struct StretchPleating {
+    ColonRegion region = ColonRegion::sigmoid;  ///< of the stretch's first mobile node
+    double rest_length_mm = 0;                  ///< unpleated, fixed end to fixed end
+    double max_fraction = 0;                    ///< p_max (capped by the chord)
+    double peak_fraction = 0;                   ///< largest p reached
+    double final_fraction = 0;                  ///< p at the end
+};
+
 struct SimulationSummary {
     bool complete = false;
     std::string message;        ///< why the run failed (empty when complete)
@@ -68,6 +77,8 @@ struct SimulationSummary {
     std::size_t dropped_contacts_total = 0;
     std::size_t material_tangent_fallbacks = 0;
     std::size_t under_relaxed_steps = 0;  ///< steps whose contact solve cycled (World::step)
+    /// Per mobile stretch, in order from the anus (all p = 0 when telescoping is off).
+    std::vector<StretchPleating> telescoping;
     double max_penetration_mm = 0;
     double friction_work_Nmm = 0;  ///< sum over steps and contacts of f_T . slip (<= 0: dissipated)
     Eigen::Vector3d final_tip_mm = Eigen::Vector3d::Zero();

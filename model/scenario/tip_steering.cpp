@@ -44,6 +44,7 @@ void TipSteering::add_scope_loads(const WorldEffectView& view,
         switched.lookahead_mm = control_->steering_lookahead_mm;
         switched.bending_section_mm = control_->steering_bending_section_mm;
         switched.gain = control_->steering_gain;
+        switched.follows_turn = control_->steering_follows_turn;
         window = &switched;
     }
     const std::size_t nodes = view.scope_nodes_mm.size();
@@ -63,7 +64,12 @@ void TipSteering::add_scope_loads(const WorldEffectView& view,
     while (j + 1 < colon_.point_count() && colon_.arc_length_mm(j) < target)
         ++j;
     const Eigen::Vector3d axis = (x_tip - view.scope_nodes_mm[tip - 1]).normalized();
-    const Eigen::Vector3d wanted = (colon_.points()[j].position_mm - x_tip).normalized();
+    Eigen::Vector3d wanted = (colon_.points()[j].position_mm - x_tip).normalized();
+    if (window->follows_turn && j + 1 < colon_.point_count())
+        wanted =
+            (wanted +
+             (colon_.points()[j + 1].position_mm - colon_.points()[j].position_mm).normalized())
+                .normalized();
     Eigen::Vector3d b = axis.cross(wanted);
     const double sine = b.norm();
     if (!(sine > 1e-9)) return;

@@ -28,6 +28,12 @@ struct SteeringWindow {
     double bending_section_mm =
         80.0;  ///< CF-Q160L bending section (stated guess from its data sheet class: 7-10 cm)
     double gain = 0.5;
+    /// Aim: false, at the centerline point lookahead_mm ahead (d above); true, along the turn:
+    /// d = the mean of that direction and the centerline's direction at that point, so that in a
+    /// tight flexure the section bends through the turn (about its angle) rather than towards a
+    /// point on the turn's outer wall (stated guess: an endoscopist angulates until the lumen
+    /// beyond the flexure is in view).
+    bool follows_turn = false;
 };
 
 class TipSteering final : public WorldEffect {

@@ -392,6 +392,47 @@ TEST(Physician, FeltResistanceStopsTheBenchOperatorsPush) {
     }
 }
 
+TEST(Physician, ResistanceWithALaggingTipMakesTheExpertReduceTheTraineePause) {
+    // The tip stops dead at 300 mm; once the hand has taken up 25 mm of scope past it (more than
+    // the expert's 20 mm lag threshold, less than its 60 mm loop threshold) the colon pushes back
+    // beyond each style's resistance. The expert takes a push that does not move the tip for a
+    // loop and reduces it, with less than its loop threshold taken up; the trainee, who pushes on
+    // into loops, pauses and pushes again, and reduces only past its 100 mm loop threshold.
+    const double stop_mm = 300, onset_mm = 25;
+    for (PhysicianStyle style : {PhysicianStyle::careful_expert, PhysicianStyle::hurried_trainee}) {
+        SCOPED_TRACE(std::string(physician_style_name(style)));
+        const PhysicianStyleParameters p = steady(style, 20.0);
+        Physician doc(spec(style), p, kStart_mm, 0.0, kScope_mm);
+        double depth = kStart_mm, taken_up_at_reduction = -1;
+        bool paused_for_resistance = false;
+        for (double t = 0; t < 40.0 && !doc.finished(); t += kH) {
+            PhysicianObservation seen;
+            seen.time_s = t;
+            seen.insertion_mm = depth;
+            seen.tip_path_mm = std::min(depth, stop_mm);
+            seen.cecum_path_mm = 1e6;
+            seen.handle_force_N = depth > stop_mm + onset_mm ? p.resistance_N + 1.0 : 1.0;
+            const HandDecision d = doc.decide(seen, kH);
+            if (d.state.state == "reduce_loop_turn" && taken_up_at_reduction < 0)
+                taken_up_at_reduction = depth - stop_mm;
+            paused_for_resistance =
+                paused_for_resistance || (d.state.state == "pause" && depth > stop_mm + onset_mm);
+            depth = d.command.insertion_mm;
+        }
+        if (style == PhysicianStyle::careful_expert) {
+            ASSERT_GT(taken_up_at_reduction, onset_mm);
+            EXPECT_LT(taken_up_at_reduction, p.loop_reduce_excess_mm);
+            EXPECT_FALSE(paused_for_resistance);
+        } else {
+            // Pauses, pushes again (2 s reaction time), and reduces only past its loop threshold.
+            EXPECT_TRUE(paused_for_resistance);
+            if (taken_up_at_reduction >= 0) {
+                EXPECT_GE(taken_up_at_reduction, p.loop_reduce_excess_mm);
+            }
+        }
+    }
+}
+
 TEST(Physician, TheHandGivesWayBeyondItsLargestPushAtOnce) {
     // 41 N (> the expert's 40 N): from the first step on the depth goes back at 20 mm/s (0.3 s:
     // 6 mm), with no reaction time; the state says so. Below it again the hand goes on.

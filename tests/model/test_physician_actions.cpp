@@ -151,6 +151,50 @@ TEST(TipSteering, CoupleBendsTheSectionTowardsTheLumenAhead) {
     EXPECT_TRUE(loads.empty());
 }
 
+TEST(TipSteering, FollowingTheTurnBendsFurtherIntoAFlexure) {
+    // A straight scope whose tip (120, 0, 0) points along +x into a 90 degree bend of radius
+    // 40 mm turning towards +y. Aimed at the point 40 mm ahead, the section bends by the angle
+    // between the tip's axis and the direction to that point (about half the turn so far: the
+    // chord); following the turn, by the angle to the mean of that direction and the
+    // centerline's own direction there (about three quarters of it). Both about +z.
+    const ColonTube tube =
+        single_bend(120.0, 40.0, M_PI / 2.0, 15.0, ColonRegion::sigmoid, kScopeRadius);
+    const double ei_Nmm2 = 1.0e6;
+    SteeringWindow window;
+    window.start_s = 0.0;
+    window.end_s = 5.0;
+    window.gain = 1.0;
+    WorldEffectView view = straight_scope_with_tilted_tip(tube, 0.0);
+    // The centerline point the law aims at: the first at or past the tip's place + 40 mm.
+    std::size_t j = 0;
+    while (tube.arc_length_mm(j) < 120.0 + window.lookahead_mm)
+        ++j;
+    const Eigen::Vector3d tip(120.0, 0.0, 0.0), axis = Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d d = (tube.points()[j].position_mm - tip).normalized();
+    const Eigen::Vector3d t =
+        (tube.points()[j + 1].position_mm - tube.points()[j].position_mm).normalized();
+    const double theta_point = std::acos(axis.dot(d));
+    const double theta_turn = std::acos(axis.dot((d + t).normalized()));
+    for (bool follows : {false, true}) {
+        SCOPED_TRACE(follows ? "follows the turn" : "aims at the point");
+        window.follows_turn = follows;
+        const TipSteering steering({window}, tube, ei_Nmm2, 10.0);
+        std::vector<NodalLoad> loads;
+        steering.add_scope_loads(view, loads);
+        ASSERT_EQ(loads.size(), 2u);
+        const double theta = follows ? theta_turn : theta_point;
+        const Eigen::Vector3d expected(0.0, 0.0, ei_Nmm2 * theta / window.bending_section_mm);
+        EXPECT_LT((loads[0].moment_Nmm - expected).norm(), 1e-6 * expected.norm())
+            << loads[0].moment_Nmm.transpose();
+    }
+    // The chord to the point 40 mm along the arc turns by half its angle (1 rad); the turn's own
+    // direction there by the whole: the point-aimed angle is about 0.5 rad, the turn-following
+    // one between the two.
+    EXPECT_NEAR(theta_point, 0.5, 0.1);
+    EXPECT_GT(theta_turn, theta_point + 0.15);
+    EXPECT_LT(theta_turn, 1.0 + 0.1);
+}
+
 nlohmann::json scenario_with_pressure() {
     return nlohmann::json::parse(R"({
     "colon": {"bundled": "single_bend", "lead_mm": 100, "bend_radius_mm": 40, "bend_angle_deg": 115,

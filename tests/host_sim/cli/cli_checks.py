@@ -72,6 +72,11 @@ def check_demo():
     # the cecum with less scope inserted than the 1,689 mm the same hands needed in a colon that
     # could not pleat (host_sim/README.md, "The main job").
     expect(s["final_tip"]["region"] == "cecum", f"the tip reaches the cecum: {s['final_tip']}")
+    stretches = {k["region"]: k for k in s["world"]["telescoping"]}
+    sigmoid = stretches.get("sigmoid", {})
+    expect(abs(sigmoid.get("rest_length_mm", 0) - 402.0) < 5.0 and
+           0.3 < sigmoid.get("peak_fraction", 0) <= sigmoid.get("max_fraction", 0),
+           f"summary.json world.telescoping: the sigmoid (402 mm) pleated by more than 30 %: {s['world']['telescoping']}")
     expect(s["procedure"]["cecum_reached"] and s["procedure"]["insertion_at_cecum_mm"] < 1600.0,
            f"the cecum reached with less than 1,600 mm inserted: {s['procedure']}")
     expect(s["peak_handle_force_N"]["true"] < 43.0, "peak handle force below the 43 N peak push measured in patients (firmware/fixed_point/RANGES.md [A])")
