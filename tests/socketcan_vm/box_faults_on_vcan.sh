@@ -79,7 +79,7 @@ mark traffic_end
 kill "$player"   # the log lasts longer than the faults take, however slow the machine
 wait "$player"
 player_status=$?
-sleep 0.3
+sleep 1   # the box reads what waits in its socket (an asan box under TCG is slow to) before it stops
 kill -INT "$box"
 wait "$box"
 box_status=$?
