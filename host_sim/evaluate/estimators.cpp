@@ -1,5 +1,7 @@
 #include "host_sim/evaluate/estimators.hpp"
 
+#include <cmath>
+
 #include "host_sim/simulator/box_observer.hpp"
 
 namespace scopekin::evaluate {
@@ -27,12 +29,27 @@ EstimatorOutput handle_force_monitor(const CaseRun& run, const EstimatorContext&
     return o;
 }
 
+/// (c) Insertion depth as the tip: the tip put at the measured insertion along the colon, as if
+/// the scope ran straight down the centerline with no slack; no force estimate, no alarms. The
+/// simplest tip estimate that covers the whole procedure in every patient: what any estimator
+/// must beat on tip position before its model earns anything (issue 21).
+EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
+    EstimatorOutput o;
+    o.tip_path_mm = run.handle_insertion_mm;
+    for (double& mm : o.tip_path_mm)  // before the first sample: at the anus
+        if (std::isnan(mm)) mm = 0.0;
+    o.loop_alarm.assign(run.time_s.size(), 0);
+    o.contact_level.assign(run.time_s.size(), 0);
+    return o;
+}
+
 }  // namespace
 
 const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
         {"depth_replay", "today's estimator (depth replay)", depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},
+        {"insertion_depth", "insertion depth as the tip (baseline, no alarms)", insertion_depth},
     };
     return registry;
 }

@@ -5,6 +5,7 @@ usage: cli_checks.py CHECK SCOPEKIN WORK_DIR [SOURCE_DIR]
 Every expectation is stated next to its check; a failure prints what differed and exits 1.
 The output_order check needs SCOPEKIN_RENAME_PROBE (rename_probe.c, built by CMake) in the
 environment."""
+import bisect
 import csv
 import json
 import os
@@ -779,7 +780,7 @@ def check_evaluate():
     expect(card["overall"]["scored"] == len(names), f"every case scored: {card['overall']['not_scored']}")
     table = rows(os.path.join(d, "scorecard.csv"))
     expect(sorted((r["case"], r["estimator"]) for r in table) ==
-           sorted((n, e) for n in names for e in ["depth_replay", "force_monitor"]), "one CSV row per case x estimator")
+           sorted((n, e) for n in names for e in ["depth_replay", "force_monitor", "insertion_depth"]), "one CSV row per case x estimator")
     # The scores against the run's own files, computed again here: the tip error of today's
     # estimator (firmware.csv against truth.csv, joined row by row), its loop alarm against the
     # true loop episodes of summary.json.
@@ -796,6 +797,15 @@ def check_evaluate():
         expect(abs(score["depth_replay"]["force_error_N"]["rms"] - force) < 1e-6 * max(1.0, force),
                f"{name}: force error RMS")
         expect(score["force_monitor"]["tip_error_mm"] is None, f"{name}: the force monitor has no tip estimate")
+        # The insertion-depth baseline: the tip at the last insertion sample at or before each period.
+        rec = rows(os.path.join(case, "recording.csv"))
+        rec_t = [float(r["time_s"]) for r in rec]
+        depth = [float(rec[max(0, bisect.bisect_right(rec_t, float(r["time_s"]) + 1e-9) - 1)]["insertion_mm"])
+                 for r in fw]
+        rms = independent_rms([{"d": str(d_mm)} for d_mm in depth], truth, "d", "tip_path_mm")
+        got = score["insertion_depth"]["tip_error_mm"]["rms"]
+        expect(abs(got - rms) < 1e-3 * max(1.0, rms), f"{name}: insertion-depth tip error {got} vs {rms} here")
+        expect(score["insertion_depth"]["loop_alarm"]["false_alarms"] == 0, f"{name}: the depth baseline never alarms")
         times = [float(r["time_s"]) for r in fw]
         loops = summary["truth"]["loop_episodes"]
         episodes_seen += len(loops)
