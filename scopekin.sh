@@ -19,7 +19,7 @@ TEST_PACKAGES=(
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
   gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
   qemu-user qemu-system-arm
-  python3-canmatrix
+  python3-canmatrix python3-sklearn
   clang-14 libclang-rt-14-dev clang-format-14
   qemu-system-x86 busybox-static can-utils cpio xz-utils iproute2
 )
