@@ -1,31 +1,40 @@
 #!/usr/bin/python3
-"""How much does the handle tell about a loop's onset? A ceiling study for the loop alarm.
+"""How much does the handle tell? A ceiling study for the box's estimates from its handle alone.
 
-Trains a learned detector on the handle signals the box receives (force, torque, insertion, roll:
-recording.csv at the box's 5 ms periods) against the true loop episodes (summary.json "truth"),
-leaving whole patients out (grouped cross-validation), and scores its alarm with the scorecard's
-rule (host_sim/evaluate/README.md, "Alarms against episodes": a rise within [onset - 1 s,
-onset + 0.5 s] detects; a rise outside every [onset - 1 s, end] is a false alarm). Sweeping its
-threshold gives the trade-off any causal estimator using these signals is up against: what a
-flexible classifier with every window of the handle's history finds, on patients it was not
-trained on. A model-based estimator adds structure, not information; if it claims much more than
-this curve on the same cases, something leaks.
+Trains learned estimators on the handle signals the box receives (force, torque, insertion, roll:
+recording.csv at the box's 5 ms periods) against the ground truth, leaving whole patients out
+(grouped cross-validation), and scores them as the scorecard does (host_sim/evaluate/README.md):
+  * the loop alarm: a classifier of "within [onset - 1 s, onset + 0.5 s] of a true loop episode"
+    (periods later inside an episode left out), its debounced alarm scored with the scorecard's
+    rule (a rise within [onset - 1 s, onset + 0.5 s] detects; a rise outside every
+    [onset - 1 s, end] is a false alarm); sweeping its threshold gives the trade-off between
+    onsets found and false alarms per 10 minutes;
+  * the tip's place along the colon: a regression of the scope taken up between the handle and
+    the tip (insertion - true tip path), the tip estimated as insertion - it; per-case RMS beside
+    the insertion-depth baseline (the tip at the insertion);
+  * the largest station force: a regression of the truth's max_station_force_N; per-case RMS
+    beside a constant (the training cases' median).
+What a flexible learner with every window of the handle's history finds on patients it was not
+trained on is what any causal estimator using these signals is up against. A model-based
+estimator adds structure, not information: one that claims far more on the same cases deserves
+suspicion; one far below leaves evidence unused.
 
-The detector: gradient-boosted trees (scikit-learn's HistGradientBoostingClassifier; Friedman
-2001, Ann. Statist. 29(5)) on causal window features (force, insertion, their changes and the
-force-per-insertion slope over 0.25-2 s, force and insertion above their 1-5 s minima, |torque|,
-roll change). Target: the periods from 1 s before a loop's onset to 0.5 s after it (the detection
-window); periods later inside an episode are left out of training. The alarm rises when the
-score has stayed above the threshold for 50 ms and falls when it has stayed 0.2 below it for 1 s
-(debounce and hysteresis, against chatter).
+The learner: gradient-boosted trees (scikit-learn's HistGradientBoostingClassifier and
+...Regressor; Friedman 2001, Ann. Statist. 29(5)) on causal window features (force, insertion,
+their changes and the force-per-insertion slope over 0.25-2 s, force and insertion above their
+1-5 s minima, |torque|, roll change). The alarm rises when the score has stayed above the
+threshold for 50 ms and falls when it has stayed 0.2 below it for 1 s (debounce and hysteresis,
+against chatter).
 
 Usage:
-  loop_evidence.py DEV_DIR [--test DIR ...] --out OUT [--folds 6]
+  handle_evidence.py DEV_DIR [--test DIR ...] --out OUT [--folds 6]
 DEV_DIR is an evaluated development set (`scopekin evaluate ... --out DEV_DIR`); without --test the
-curve is the cross-validated one on DEV_DIR's patients; with --test the detector is trained on all
-of DEV_DIR and scored on each test folder (report only: never tune on it). Writes OUT/
-loop_evidence.json, loop_evidence.csv (one row per style x threshold) and loop_evidence.png.
-Exit 0 done, 2 bad input (a folder without evaluated cases, a case without its files).
+figures are the cross-validated ones on DEV_DIR's patients; with --test the learners are trained on
+all of DEV_DIR and scored on each test folder (report only: never tune on it). Writes OUT/
+handle_evidence.json, handle_evidence_loop.csv (one row per set x style x threshold),
+handle_evidence_errors.csv (one row per set x case) and handle_evidence.png (one per test set,
+handle_evidence_NAME.png). Exit 0 done, 2 bad input (a folder without evaluated cases, a case
+without its files, too few patients for the folds).
 """
 import argparse
 import csv
@@ -48,18 +57,20 @@ BUDGETS_PER_10MIN = [2.0, 0.5]  # issue 21's bound and goal for false loop alarm
 
 
 def fail(message):
-    print(f"loop_evidence: {message}", file=sys.stderr)
+    print(f"handle_evidence: {message}", file=sys.stderr)
     sys.exit(2)
 
 
 def read_case(folder):
-    """The handle signals at the box's periods and the true loop episodes of one case."""
+    """The handle signals at the box's periods, the true tip path and largest station force
+    (estimates.csv) and the true loop episodes of one case."""
     need = ["estimates.csv", "recording.csv", "summary.json"]
     for name in need:
         if not os.path.isfile(os.path.join(folder, name)):
             fail(f"{folder}: no {name} (run `scopekin evaluate` on it first)")
-    times = np.genfromtxt(os.path.join(folder, "estimates.csv"), delimiter=",", names=True,
-                          usecols=(0,))["time_s"]
+    est = np.genfromtxt(os.path.join(folder, "estimates.csv"), delimiter=",", names=True,
+                        usecols=(0, 1, 2))
+    times = est["time_s"]
     rec = np.genfromtxt(os.path.join(folder, "recording.csv"), delimiter=",", names=True,
                         usecols=(0, 1, 2, 3, 4))
     if times.size < 2 or rec.size < 2:
@@ -71,7 +82,9 @@ def read_case(folder):
                 for e in truth.get("loop_episodes", [])]
     return {"time_s": times, "force_N": rec["handle_force_N"][at],
             "torque_Nmm": rec["handle_torque_Nmm"][at], "insertion_mm": rec["insertion_mm"][at],
-            "roll_rad": rec["roll_rad"][at], "episodes": episodes}
+            "roll_rad": rec["roll_rad"][at], "episodes": episodes,
+            "true_tip_path_mm": np.nan_to_num(est["true_tip_path_mm"]),
+            "true_max_force_N": np.nan_to_num(est["true_max_station_force_N"])}
 
 
 def lagged(a, n):
@@ -155,7 +168,7 @@ def load_set(folder):
         fail(f"{folder}: no cases/ (not an evaluated set)")
     out = []
     for i, c in enumerate(cases):
-        print(f"loop_evidence: reading {folder} [{i + 1}/{len(cases)}]", file=sys.stderr, end="\r")
+        print(f"handle_evidence: reading {folder} [{i + 1}/{len(cases)}]", file=sys.stderr, end="\r")
         case = read_case(c)
         name = os.path.basename(c)
         case.update(name=name, patient=name.split("-")[0],
@@ -166,15 +179,53 @@ def load_set(folder):
     return out
 
 
-def train(cases):
-    from sklearn.ensemble import HistGradientBoostingClassifier
+def training_rows(cases):
     X = np.vstack([c["X"][::SUBSAMPLE] for c in cases])
-    y = np.concatenate([c["y"][::SUBSAMPLE] for c in cases])
+    pick = lambda key: np.concatenate([c[key][::SUBSAMPLE] for c in cases])
+    return X, pick
+
+
+def train(cases):
+    """The three learners on these cases: loop-onset classifier, slack and force regressions."""
+    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+    X, pick = training_rows(cases)
+    y = pick("y")
     keep = y >= 0
-    model = HistGradientBoostingClassifier(max_iter=150, learning_rate=0.05, max_leaf_nodes=15,
-                                           l2_regularization=1.0, min_samples_leaf=200,
-                                           random_state=0)
-    return model.fit(X[keep], y[keep])
+    settings = dict(max_iter=150, learning_rate=0.05, max_leaf_nodes=15, l2_regularization=1.0,
+                    min_samples_leaf=200, random_state=0)
+    onset = HistGradientBoostingClassifier(**settings).fit(X[keep], y[keep])
+    slack = HistGradientBoostingRegressor(**settings).fit(
+        X, pick("insertion_mm") - pick("true_tip_path_mm"))
+    force = HistGradientBoostingRegressor(**settings).fit(X, pick("true_max_force_N"))
+    return {"onset": onset, "slack": slack, "force": force,
+            "force_constant_N": float(np.median(pick("true_max_force_N")))}
+
+
+def apply(learners, case):
+    """The learners' outputs on one case: alarm score, tip estimate, force estimate."""
+    case["score"] = learners["onset"].predict_proba(case["X"])[:, 1]
+    case["tip_mm"] = case["insertion_mm"] - learners["slack"].predict(case["X"])
+    case["force_est_N"] = learners["force"].predict(case["X"])
+    case["force_constant_N"] = learners["force_constant_N"]
+
+
+def rms(a):
+    return float(np.sqrt(np.mean(np.square(a))))
+
+
+def case_errors(c):
+    """Per-case RMS: learned tip and force beside their baselines."""
+    return {"case": c["name"], "style": c["style"],
+            "tip_learned_rms_mm": rms(c["tip_mm"] - c["true_tip_path_mm"]),
+            "tip_insertion_rms_mm": rms(c["insertion_mm"] - c["true_tip_path_mm"]),
+            "force_learned_rms_N": rms(c["force_est_N"] - c["true_max_force_N"]),
+            "force_constant_rms_N": rms(c["force_constant_N"] - c["true_max_force_N"])}
+
+
+def distribution(values):
+    v = np.asarray(values, dtype=float)
+    return {"median": float(np.median(v)), "p90": float(np.percentile(v, 90)),
+            "worst": float(v.max())}
 
 
 def curve(cases):
@@ -206,25 +257,40 @@ def at_budget(rows, style, budget):
     return max(ok, key=lambda r: (r["detected_share"] or 0.0)) if ok else None
 
 
-def plot(rows, path, title):
+def plot(rows, errors, path, title):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), gridspec_kw={"width_ratios": [1.4, 1, 1]})
+    ax = axes[0]
     for style in sorted({r["style"] for r in rows}):
         pts = [r for r in rows if r["style"] == style]
         ax.plot([r["false_alarms_per_10min"] for r in pts],
                 [100 * (r["detected_share"] or 0) for r in pts], "o-", ms=3, label=style)
     ax.axhline(90, color="k", ls="--", lw=0.8)
     ax.axvline(2, color="k", ls="--", lw=0.8)
-    ax.text(2.1, 91, "issue 21's bound: >= 90 % within 0.5 s, <= 2 false / 10 min", fontsize=7)
+    ax.text(2.1, 91, "issue 21's bound", fontsize=7)
     ax.set_xscale("symlog", linthresh=1)
     ax.set_xlim(left=0)
     ax.set_xlabel("false loop alarms per 10 min")
     ax.set_ylabel("loop onsets detected within 0.5 s [%]")
     ax.set_ylim(0, 100)
-    ax.set_title(title, fontsize=9)
-    ax.legend()
+    ax.set_title("loop alarm", fontsize=9)
+    ax.legend(fontsize=8)
+    for ax, (learned, base, unit, bound, what) in zip(axes[1:], [
+            ("tip_learned_rms_mm", "tip_insertion_rms_mm", "mm", 20, "tip: insertion"),
+            ("force_learned_rms_N", "force_constant_rms_N", "N", 1.5, "force: constant")]):
+        data = [[e[base] for e in errors], [e[learned] for e in errors]]
+        ax.boxplot(data, labels=[what, "learned"], showfliers=False)
+        for i, d in enumerate(data):
+            ax.plot(np.full(len(d), i + 1) + np.linspace(-0.1, 0.1, len(d)), d, ".", ms=4,
+                    color="tab:blue")
+        ax.axhline(bound, color="k", ls="--", lw=0.8)
+        ax.text(0.55, bound, "issue 21's median bound", fontsize=7, va="bottom")
+        ax.set_yscale("log")
+        ax.set_ylabel(f"RMS per case [{unit}]")
+        ax.set_title(f"{learned.split('_')[0]} error per case", fontsize=9)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
 
@@ -239,7 +305,8 @@ def main():
     if args.folds < 2:
         fail("--folds must be at least 2")
     dev = load_set(args.dev)
-    report = {"rule": "host_sim/evaluate/README.md, alarms against episodes (1 s early, 0.5 s)",
+    report = {"rule": "host_sim/evaluate/README.md: alarms against episodes (1 s early, 0.5 s); "
+                      "errors as RMS per case over its periods",
               "features": "handle force, torque, insertion, roll at the box's periods (causal)",
               "sets": {}}
     patients = sorted({c["patient"] for c in dev})
@@ -247,30 +314,38 @@ def main():
         fail(f"{args.dev}: {len(patients)} patients, fewer than --folds {args.folds}")
     folds = [patients[i::args.folds] for i in range(args.folds)]
     for i, held in enumerate(folds):
-        print(f"loop_evidence: fold {i + 1}/{args.folds} (leaving out {', '.join(held)})",
+        print(f"handle_evidence: fold {i + 1}/{args.folds} (leaving out {', '.join(held)})",
               file=sys.stderr)
-        model = train([c for c in dev if c["patient"] not in held])
+        learners = train([c for c in dev if c["patient"] not in held])
         for c in dev:
             if c["patient"] in held:
-                c["score"] = model.predict_proba(c["X"])[:, 1]
+                apply(learners, c)
     sets = [("development (patients left out)", dev)]
     if args.test:
-        print("loop_evidence: training on all of the development set", file=sys.stderr)
-        model = train(dev)
+        print("handle_evidence: training on all of the development set", file=sys.stderr)
+        learners = train(dev)
         for folder in args.test:
             cases = load_set(folder)
             for c in cases:
-                c["score"] = model.predict_proba(c["X"])[:, 1]
+                apply(learners, c)
             sets.append((os.path.basename(os.path.normpath(folder)), cases))
     os.makedirs(args.out, exist_ok=True)
-    all_rows = []
+    all_rows, all_errors = [], []
     for name, cases in sets:
         rows = curve(cases)
+        errors = [case_errors(c) for c in cases]
+        all_errors += [{"set": name, **e} for e in errors]
+        error_summary = {}
+        for style in sorted({e["style"] for e in errors}) + ["all"]:
+            chosen = [e for e in errors if style in ("all", e["style"])]
+            error_summary[style] = {k: distribution([e[k] for e in chosen])
+                                    for k in errors[0] if k.endswith(("_mm", "_N"))}
         summary = {}
         for style in sorted({r["style"] for r in rows}):
             summary[style] = {f"within_{b:g}_per_10min": at_budget(rows, style, b)
                               for b in BUDGETS_PER_10MIN}
-        report["sets"][name] = {"cases": len(cases), "curve": rows, "best_within_budget": summary}
+        report["sets"][name] = {"cases": len(cases), "curve": rows, "best_within_budget": summary,
+                                "errors": errors, "error_distributions": error_summary}
         for r in rows:
             all_rows.append({"set": name, **r})
         for style, s in summary.items():
@@ -279,17 +354,25 @@ def main():
                 f"{b['detected']} of {b['episodes']} ({100 * b['detected_share']:.0f} %) at "
                 f"{b['false_alarms_per_10min']:.2f} false per 10 min (threshold {b['threshold']}; "
                 f"within {LATE_S:g} s: {b[f'detected_within_{LATE_S:g}_s']})")
-            print(f"{name}: {style}: {text}")
-        plot(rows, os.path.join(args.out, "loop_evidence.png" if name == sets[0][0]
-                                else f"loop_evidence_{name}.png"),
-             f"Loop onsets from the handle alone: {name}, {len(cases)} cases")
-    with open(os.path.join(args.out, "loop_evidence.json"), "w") as out:
+            print(f"{name}: {style}: loop onsets {text}")
+        for style, d in error_summary.items():
+            f = lambda k: "{median:.3g} / {p90:.3g} / {worst:.3g}".format(**d[k])
+            print(f"{name}: {style}: tip RMS [mm] learned {f('tip_learned_rms_mm')}, insertion "
+                  f"{f('tip_insertion_rms_mm')}; largest force RMS [N] learned "
+                  f"{f('force_learned_rms_N')}, constant {f('force_constant_rms_N')} "
+                  "(median / p90 / worst case)")
+        plot(rows, errors, os.path.join(args.out, "handle_evidence.png" if name == sets[0][0]
+                                        else f"handle_evidence_{name}.png"),
+             f"What the handle alone tells: {name}, {len(cases)} cases (learned on other patients)")
+    with open(os.path.join(args.out, "handle_evidence.json"), "w") as out:
         json.dump(report, out, indent=1)
-    with open(os.path.join(args.out, "loop_evidence.csv"), "w", newline="") as out:
-        w = csv.DictWriter(out, fieldnames=list(all_rows[0].keys()))
-        w.writeheader()
-        w.writerows(all_rows)
-    print(f"loop_evidence: wrote {args.out}/loop_evidence.json, .csv, .png", file=sys.stderr)
+    for suffix, table in (("loop", all_rows), ("errors", all_errors)):
+        with open(os.path.join(args.out, f"handle_evidence_{suffix}.csv"), "w", newline="") as out:
+            w = csv.DictWriter(out, fieldnames=list(table[0].keys()))
+            w.writeheader()
+            w.writerows(table)
+    print(f"handle_evidence: wrote {args.out}/handle_evidence.json, _loop.csv, _errors.csv, .png",
+          file=sys.stderr)
 
 
 if __name__ == "__main__":
