@@ -297,8 +297,8 @@ def plot(rows, errors, path, title):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("dev", help="an evaluated development set (its cases/ folder)")
-    parser.add_argument("--test", nargs="*", default=[], help="evaluated sets to score on (report only)")
+    parser.add_argument("dev", help="the folder of an evaluated development set (the --out of scopekin evaluate: cases/ inside)")
+    parser.add_argument("--test", nargs="*", default=[], help="folders of evaluated sets to score on (report only, never tuned on)")
     parser.add_argument("--out", required=True, help="output folder")
     parser.add_argument("--folds", type=int, default=6, help="patient folds for cross-validation")
     args = parser.parse_args()
