@@ -142,7 +142,9 @@ TruthReadout TruthReader::read(const World& world) const {
         now[i] = world.colon_position_mm(i);
     const std::vector<double> arc = displaced_arc_lengths(now);
 
-    // Stations: the place and frame World::probe_stations gives them (same window, same rule).
+    // Stations: the place and frame World::probe_stations gives them (same window, same rule):
+    // around the segment the contact detection tracks the node on, so the tip's coordinate is
+    // continuous and follows the contact model's own idea of where the node is.
     const std::size_t k = layout_.nodes.size();  // the stations on the scope
     r.stations.resize(layout_.stations);
     StationCompliance probe;  // increasing node order (station k-1 first), frames only
@@ -154,8 +156,9 @@ TruthReadout TruthReader::read(const World& world) const {
         const double expected = r.insertion_mm - world.arc_from_tip_mm(node);
         st.inside = (x - anus_).dot(entry_) > 1e-9 && expected > 0.0;
         if (st.inside) {
-            const CenterlinePlace place = locate_on_centerline(
-                now, rest_arc_mm_, arc, x, expected - kSearchBack_mm, expected + kSearchAhead_mm);
+            const auto [from_mm, to_mm] = world.centerline_search_window_mm(node, kSearchBack_mm);
+            const CenterlinePlace place =
+                locate_on_centerline(now, rest_arc_mm_, arc, x, from_mm, to_mm);
             if (place.found) {
                 const std::size_t j = place.segment;
                 const Eigen::Vector3d c = now[j] + place.weight * (now[j + 1] - now[j]);
@@ -205,9 +208,10 @@ TruthReadout TruthReader::read(const World& world) const {
         r.has_wall_force = true;
         r.max_wall_region = largest->region;
         const double expected = r.insertion_mm - largest->arc_from_tip_mm;
+        const auto [from_mm, to_mm] =
+            world.centerline_search_window_mm(largest->scope_node, kSearchBack_mm);
         const CenterlinePlace place =
-            locate_on_centerline(now, rest_arc_mm_, arc, largest->scope_point_mm,
-                                 expected - kSearchBack_mm, expected + kSearchAhead_mm);
+            locate_on_centerline(now, rest_arc_mm_, arc, largest->scope_point_mm, from_mm, to_mm);
         r.max_wall_path_mm = place.found ? place.path_mm : std::max(0.0, expected);
     }
 

@@ -95,10 +95,10 @@ public:
     TruthReadout read(const World& world) const;
     const StationLayout& layout() const { return layout_; }
 
-    /// How far back along the colon a station's closest point is searched, from where its arc
-    /// allows (World::probe_stations' default window: [expected - 400 mm, expected + 5 mm]).
+    /// A station the contact detection does not track yet (before the first step) is searched
+    /// from this far back along the colon from where its arc allows up to 5 mm past it
+    /// (World::centerline_search_window_mm; a tracked one is searched around its tracked segment).
     static constexpr double kSearchBack_mm = 400.0;
-    static constexpr double kSearchAhead_mm = 5.0;
 
 private:
     StationLayout layout_;

@@ -825,6 +825,25 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
 
 namespace scopekin::model {
 
+long World::tracked_colon_segment(std::size_t node) const {
+    return node < tracking_.segment.size() ? tracking_.segment[node] : -1;
+}
+
+std::pair<double, double> World::centerline_search_window_mm(std::size_t node,
+                                                             double search_back_mm) const {
+    const long tracked = tracked_colon_segment(node);
+    if (tracked < 0) {
+        const double expected = insertion_depth_mm() - arc_from_tip_mm(node);
+        return {expected - search_back_mm, expected + 5.0};
+    }
+    const auto segment = static_cast<std::size_t>(tracked);
+    const std::size_t reach = tracking_.window_segments + 1;
+    const std::size_t last_point = tube_.point_count() - 1;
+    const std::size_t first = segment > reach ? segment - reach : 0;
+    const std::size_t last = std::min(last_point, segment + reach + 1);
+    return {tube_.arc_length_mm(first), tube_.arc_length_mm(last)};
+}
+
 StationCompliance World::probe_stations(const std::vector<std::size_t>& nodes,
                                         double search_back_mm) {
     for (std::size_t i = 0; i < nodes.size(); ++i)
@@ -851,10 +870,9 @@ StationCompliance World::probe_stations(const std::vector<std::size_t>& nodes,
         p.inside = x.x() > 1e-9 && expected > 0.0;
         if (!p.inside) continue;
         double best = std::numeric_limits<double>::infinity();
+        const auto [from_mm, to_mm] = centerline_search_window_mm(nodes[a], search_back_mm);
         for (std::size_t j = 0; j + 1 < colon.size(); ++j) {
-            if (tube_.arc_length_mm(j + 1) < expected - search_back_mm ||
-                tube_.arc_length_mm(j) > expected + 5.0)
-                continue;
+            if (tube_.arc_length_mm(j + 1) < from_mm || tube_.arc_length_mm(j) > to_mm) continue;
             const Eigen::Vector3d d = colon[j + 1] - colon[j];
             const double w = std::clamp((x - colon[j]).dot(d) / d.squaredNorm(), 0.0, 1.0);
             const double dist = (colon[j] + w * d - x).norm();

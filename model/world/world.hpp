@@ -201,12 +201,23 @@ public:
     const ColonPleating& telescoping() const { return *pleating_; }
     /// The scope in the computation frame (anus at the origin, entry axis +x), for tests.
     const ScopeBeam& scope_computation_frame() const { return scope_; }
+    /// The centerline segment the contact detection last placed a scope node on (its tracked
+    /// search at the start of the last step; contact_detection.hpp), -1 before the first step or
+    /// while the node is outside the body.
+    long tracked_colon_segment(std::size_t node) const;
+    /// The colon coordinates [from, to] (rest arc length, mm) in which a node's closest centerline
+    /// point is searched. Where the contact detection tracks the node: its tracked segment and the
+    /// tracking window around it plus one segment (about +-4 segments), so the place follows the
+    /// node continuously along the colon, as the contact model sees it, and never jumps to another
+    /// turn of a loop that lies closer in space. Untracked: [depth - arc_from_tip -
+    /// search_back_mm, depth - arc_from_tip + 5 mm] (a shaft cannot be further along the colon
+    /// than its length allows).
+    std::pair<double, double> centerline_search_window_mm(std::size_t node,
+                                                          double search_back_mm) const;
     /// The given scope nodes (strictly increasing) against the colon in its current shape: where
     /// they are along the centerline and the quasi-static compliance between them (K_T^-1 of the
     /// scope with the handle held, material tangent where the full one is indefinite). Each node's
-    /// closest centerline point is searched along the colon within [depth - arc_from_tip -
-    /// search_back_mm, depth - arc_from_tip + 5 mm]: a shaft cannot be further along the colon than
-    /// its length allows, and the window keeps a node off other turns of a loop.
+    /// closest centerline point is searched within centerline_search_window_mm.
     StationCompliance probe_stations(const std::vector<std::size_t>& nodes,
                                      double search_back_mm = 400.0);
     /// Kinetic + strain energy of the scope [N mm] and its potential energy in gravity.

@@ -427,6 +427,30 @@ TEST(TruthReader, AStraightScopeInAStraightTubeIsAtItsDepth) {
     EXPECT_NEAR(r.bow_mm, 0.0, 1e-9);
 }
 
+// Where the contact detection tracks a node, its place along the colon is searched only around
+// the tracked segment: a node cannot be read onto another turn of a loop that lies closer in
+// space (the 400 mm window did that in looped runs: the truth tip jumped 200 mm in 10 ms).
+TEST(TruthReader, ATrackedNodeIsSearchedAroundItsTrackedSegmentOnly) {
+    World world = straight_world(600.0, 300.0);  // 10 mm segments; the tip at 300 mm
+    const std::size_t tip = world.scope_node_count() - 1;
+    EXPECT_EQ(world.tracked_colon_segment(tip), -1);
+    const auto [untracked_from, untracked_to] = world.centerline_search_window_mm(tip, 400.0);
+    EXPECT_NEAR(untracked_from, 300.0 - 400.0, 1e-9);
+    EXPECT_NEAR(untracked_to, 300.0 + 5.0, 1e-9);
+
+    HandleCommand hold;
+    hold.insertion_mm = 300.0;
+    ASSERT_TRUE(world.step(hold).ok);
+    const long segment = world.tracked_colon_segment(tip);
+    ASSERT_GE(segment, 29);  // the segment [290, 300] or [300, 310] mm
+    ASSERT_LE(segment, 30);
+    const auto [from, to] = world.centerline_search_window_mm(tip, 400.0);
+    EXPECT_NEAR(from, 10.0 * static_cast<double>(segment - 4), 1e-9);  // 3 + 1 segments back
+    EXPECT_NEAR(to, 10.0 * static_cast<double>(segment + 5), 1e-9);    // and ahead (its end)
+    const TruthReader reader(world, station_layout(world, 4, 50.0), Eigen::Vector3d::Zero());
+    EXPECT_NEAR(reader.read(world).tip_path_mm, 300.0, 1e-6);
+}
+
 TEST(TruthReader, AScopeShorterThanTheStationsSpanHasTheStationsThatFit) {
     // 300 mm of scope in 30 elements: stations 0..6 (0 to 300 mm from the tip) fit, 7..11 do not.
     // The reduction's layout refuses such a scope; truth.csv's takes the stations that fit.
