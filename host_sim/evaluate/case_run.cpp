@@ -1,5 +1,6 @@
 #include "host_sim/evaluate/case_run.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -9,6 +10,7 @@
 
 #include "host_sim/recording/recording_reader.hpp"
 #include "model/io/strict_json.hpp"
+#include "model/truth/truth_readout.hpp"
 
 namespace scopekin::evaluate {
 namespace {
@@ -32,6 +34,15 @@ std::vector<std::string> split(const std::string& line) {
         out.push_back(cell);
     if (!line.empty() && line.back() == ',') out.emplace_back();
     return out;
+}
+
+bool has_column(const fs::path& file, const std::string& name) {
+    std::ifstream in(file);
+    std::string line;
+    if (!in || !std::getline(in, line)) return false;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::vector<std::string> header = split(line);
+    return std::find(header.begin(), header.end(), name) != header.end();
 }
 
 Columns read_columns(const fs::path& file, const std::vector<std::string>& wanted) {
@@ -147,6 +158,38 @@ ProcedureOutcome read_procedure(const Json& summary) {
     return p;
 }
 
+/// Keeps what came before `lost_s` (CaseRun::scope_through_wall_s).
+static void cut_where_the_scope_went_through_the_wall(CaseRun& run, double lost_s) {
+    const auto periods = static_cast<std::size_t>(
+        std::lower_bound(run.time_s.begin(), run.time_s.end(), lost_s - 1e-9) - run.time_s.begin());
+    const auto cut = [periods](auto& series) {
+        if (series.size() > periods) series.resize(periods);
+    };
+    cut(run.time_s);
+    cut(run.true_tip_path_mm);
+    cut(run.true_max_station_force_N);
+    cut(run.insertion_mm);
+    cut(run.box_tip_path_mm);
+    cut(run.box_max_contact_force_N);
+    cut(run.box_self_lock);
+    cut(run.box_contact_level);
+    cut(run.box_fault_flags);
+    cut(run.handle_force_N);
+    cut(run.handle_insertion_mm);
+    const auto samples = static_cast<std::size_t>(
+        std::lower_bound(run.sample_time_s.begin(), run.sample_time_s.end(), lost_s - 1e-9) -
+        run.sample_time_s.begin());
+    run.sample_time_s.resize(std::min(samples, run.sample_time_s.size()));
+    run.sample_force_N.resize(run.sample_time_s.size());
+    run.sample_insertion_mm.resize(run.sample_time_s.size());
+    for (std::vector<Episode>* list :
+         {&run.loop_episodes, &run.warning_episodes, &run.critical_episodes}) {
+        std::erase_if(*list, [lost_s](const Episode& e) { return e.onset_s >= lost_s; });
+        for (Episode& e : *list)
+            if (e.end_s && *e.end_s >= lost_s) e.end_s.reset();
+    }
+}
+
 CaseRun read_case_run(const fs::path& folder) {
     CaseRun run;
     const fs::path summary_file = folder / "summary.json";
@@ -181,8 +224,12 @@ CaseRun read_case_run(const fs::path& folder) {
                       summary_file.string() + ": truth.force_episodes.critical_14N");
 
     const fs::path truth_file = folder / "truth.csv";
-    const Columns truth =
-        read_columns(truth_file, {"time_s", "insertion_mm", "tip_path_mm", "max_station_force_N"});
+    // scope_beyond_wall_mm: runs before 2026-11-27 lack it (then nothing is cut).
+    const bool beyond_wall = has_column(truth_file, "scope_beyond_wall_mm");
+    std::vector<std::string> truth_columns{"time_s", "insertion_mm", "tip_path_mm",
+                                           "max_station_force_N"};
+    if (beyond_wall) truth_columns.emplace_back("scope_beyond_wall_mm");
+    const Columns truth = read_columns(truth_file, truth_columns);
     const fs::path fw_file = folder / "firmware.csv";
     const Columns fw =
         read_columns(fw_file, {"time_s", "tip_path_mm", "max_contact_force_N", "self_lock_alarm",
@@ -242,6 +289,15 @@ CaseRun read_case_run(const fs::path& folder) {
         run.handle_insertion_mm.push_back(
             run.sample_insertion_mm.empty() ? kNaN : run.sample_insertion_mm.back());
         ++next;
+    }
+    if (beyond_wall) {
+        const std::vector<double> beyond_mm = numbers(truth, 4, truth_file, "scope_beyond_wall_mm");
+        for (std::size_t k = 0; k < beyond_mm.size(); ++k)
+            if (beyond_mm[k] > model::truth::TruthReader::kThroughWall_mm) {
+                run.scope_through_wall_s = run.time_s[k];
+                cut_where_the_scope_went_through_the_wall(run, run.time_s[k]);
+                break;
+            }
     }
     return run;
 }

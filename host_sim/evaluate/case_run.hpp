@@ -48,6 +48,11 @@ struct CaseRun {
     std::vector<double> insertion_mm;  ///< true insertion
     // summary.json "truth"
     std::vector<Episode> loop_episodes, warning_episodes, critical_episodes;
+    /// When the scope went through the colon wall (the first period whose truth.csv
+    /// scope_beyond_wall_mm exceeds TruthReader::kThroughWall_mm): the run is not physical from
+    /// there on, so every series ends before it and episodes that began later are dropped (an
+    /// episode still up then is up at the end). Unset: the whole run.
+    std::optional<double> scope_through_wall_s;
     // firmware.csv: the box's outputs
     std::vector<double> box_tip_path_mm;
     std::vector<double> box_max_contact_force_N;
@@ -64,8 +69,9 @@ struct CaseRun {
 };
 
 /// Reads a run folder written by `scopekin simulate`: summary.json, truth.csv, firmware.csv,
-/// recording.csv. Throws CaseDataError (a missing file, a missing column, rows that do not
-/// join, a cell that is not a number), naming the file and line.
+/// recording.csv, cut where the scope went through the colon wall (scope_through_wall_s).
+/// Throws CaseDataError (a missing file, a missing column, rows that do not join, a cell that
+/// is not a number), naming the file and line.
 CaseRun read_case_run(const std::filesystem::path& folder);
 
 /// summary.json "procedure" (physicians' contract), or unknown.

@@ -112,6 +112,7 @@ Json score_case(const std::string& name, const std::string& style, const std::st
     s["duration_s"] = run.duration_s;
     s["wall_time_s"] = run.wall_time_s;
     s["periods"] = run.time_s.size();
+    s["scope_through_wall_s"] = run.scope_through_wall_s ? Json(*run.scope_through_wall_s) : Json();
     if (run.procedure.known) {
         const ProcedureOutcome& p = run.procedure;
         s["procedure"] = {{"kind", p.kind},
@@ -223,6 +224,15 @@ Json aggregate(const std::vector<Json>& cases) {
     overall["cases"] = cases.size();
     overall["scored"] = scored;
     overall["not_scored"] = not_scored;
+    // Cases in which the scope went through the wall: scored only before that moment.
+    Json cut_short = Json::array();
+    for (const Json& c : cases)
+        if (c.value("status", "") == "complete" && c.contains("scope_through_wall_s") &&
+            c["scope_through_wall_s"].is_number())
+            cut_short.push_back({{"case", c.value("case", "")},
+                                 {"scope_through_wall_s", c["scope_through_wall_s"]},
+                                 {"duration_s", c.value("duration_s", 0.0)}});
+    overall["cut_short"] = cut_short;
     overall["simulated_s"] = simulated_s;
     overall["simulation_wall_s"] = wall_s;
     Json estimators = Json::array();
@@ -460,7 +470,19 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
     }
     md << "; " << fmt(get(overall, "simulated_s"), "%.1f") << " s simulated in "
        << fmt(get(overall, "simulation_wall_s"), "%.1f")
-       << " s of the cases' own wall times (summed). Distributions over the cases are given as "
+       << " s of the cases' own wall times (summed).";
+    if (overall.contains("cut_short") && !overall["cut_short"].empty()) {
+        md << " " << overall["cut_short"].size()
+           << (overall["cut_short"].size() == 1 ? " of them was" : " of them were")
+           << " scored only up to where the scope went through the colon wall (its "
+              "axis more than 40 mm beyond it: the run is not physical after it):";
+        for (const Json& c : overall["cut_short"])
+            md << " " << c.value("case", "") << " ("
+               << fmt(c.value("scope_through_wall_s", 0.0), "%.1f") << " of "
+               << fmt(c.value("duration_s", 0.0), "%.1f") << " s)";
+        md << ".";
+    }
+    md << " Distributions over the cases are given as "
           "median / 90th "
           "percentile / worst; detections, misses and false alarms are pooled over the cases. "
           "Rules: host_sim/evaluate/README.md.\n\n";

@@ -53,12 +53,14 @@ TruthSample truth_sample(const model::truth::TruthReadout& r) {
     s.bow_mm = r.bow_mm;
     s.region_bow_mm = r.region_bow_mm;
     s.scope_crosses = r.scope_crosses;
+    s.scope_beyond_wall_mm = r.scope_beyond_wall_mm;
     return s;
 }
 
 TruthSample blend(const TruthSample& a, const TruthSample& b, double w) {
     const auto mix = [w](double x, double y) { return x + w * (y - x); };
     TruthSample r = w < 0.5 ? a : b;  // labels, flags and indices from the nearer one
+    r.scope_beyond_wall_mm = std::max(a.scope_beyond_wall_mm, b.scope_beyond_wall_mm);
     r.time_s = mix(a.time_s, b.time_s);
     r.insertion_mm = mix(a.insertion_mm, b.insertion_mm);
     r.tip_path_mm = mix(a.tip_path_mm, b.tip_path_mm);
@@ -117,7 +119,7 @@ std::string truth_csv_header(std::size_t stations) {
     }
     h += ",max_station_force_N,max_station,max_wall_force_N,max_wall_path_mm,max_wall_region,"
          "advance_efficiency,loop_excess_mm,loop_episode,loop_type,loop_region,force_level,"
-         "force_warning_episode,force_critical_episode";
+         "force_warning_episode,force_critical_episode,scope_beyond_wall_mm";
     return h;
 }
 
@@ -188,7 +190,7 @@ nlohmann::ordered_json TruthRecorder::write(std::ostream* out,
                                    : warning_number[i] > 0 ? 1
                                                            : 0) +
                     ',' + std::to_string(warning_number[i]) + ',' +
-                    std::to_string(critical_number[i]) + '\n';
+                    std::to_string(critical_number[i]) + ',' + num(s.scope_beyond_wall_mm) + '\n';
             *out << line;
         }
     }
@@ -226,6 +228,17 @@ nlohmann::ordered_json TruthRecorder::write(std::ostream* out,
              {"onset_tip_path_mm", rows[ep.onset].tip_path_mm}});
     }
     section["loop_episodes"] = loop_list;
+    // The first period at which the scope had gone through the colon wall: from there on the run
+    // is not physical (TruthReader::kThroughWall_mm), and the scorecard scores the case only
+    // before it.
+    std::optional<double> through_s;
+    for (const TruthSample& s : rows)
+        if (s.scope_beyond_wall_mm > truth::TruthReader::kThroughWall_mm) {
+            through_s = s.time_s;
+            break;
+        }
+    section["scope_through_wall_s"] = optional_time(through_s);
+    section["through_wall_mm"] = truth::TruthReader::kThroughWall_mm;
     const auto force_list = [&](const std::vector<truth::ForceEpisode>& episodes) {
         Json list = Json::array();
         for (std::size_t e = 0; e < episodes.size(); ++e) {

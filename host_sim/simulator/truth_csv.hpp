@@ -36,6 +36,7 @@ struct TruthSample {
     double bow_mm = 0;
     model::truth::RegionBow region_bow_mm{};
     bool scope_crosses = false;
+    double scope_beyond_wall_mm = 0;  ///< TruthReadout::scope_beyond_wall_mm
 };
 
 TruthSample truth_sample(const model::truth::TruthReadout& r);

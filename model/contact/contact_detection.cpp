@@ -65,10 +65,11 @@ std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope,
             const std::size_t first =
                 h > tracking->window_segments ? h - tracking->window_segments : 0;
             const std::size_t last = std::min(segments - 1, h + tracking->window_segments);
+            // Only near where it was: the colon at rest is searched, and a node of a mobile stretch
+            // pushed away with its colon (a loop bows the sigmoid 100 mm and more) is far from
+            // it; a full search would put it on whatever other part of the colon lies nearer at
+            // rest, and the contact would then act on the wrong colon.
             best = closest_segment(x, colon, first, last);
-            // Lost (a jump larger than the window): search everything.
-            if (best.distance > 2.0 * p[best.segment].inner_radius_mm)
-                best = closest_segment(x, colon, 0, segments - 1);
         } else {
             // O(nodes x segments) without tracking: ~3e4 point-segment tests for the full scope.
             best = closest_segment(x, colon, 0, segments - 1);

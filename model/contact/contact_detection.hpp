@@ -39,8 +39,12 @@ std::vector<ContactCandidate> detect_contacts(const ScopeBeam& scope, const Scop
 /// Where each scope node was on the centerline last time (-1: not yet tracked), so that time
 /// stepping searches only nearby segments: O(nodes) instead of O(nodes x segments), and a node
 /// cannot jump to a part of the colon that is close in space but far along the colon (the
-/// loops of the sigmoid). A node whose nearby search finds nothing within one lumen diameter
-/// falls back to the full search.
+/// loops of the sigmoid). A tracked node is only ever searched within its window: the search is
+/// against the colon at rest, and a node of a mobile stretch that the scope has pushed away
+/// (with its colon) lies far from it; until 2026-11-27 such a node, more than a lumen diameter
+/// from its window, was searched for along the whole colon and put on whatever part lay nearer
+/// at rest (in the CI's p0005-push-30 the tip, 35.7 mm from its own segment in the bowed
+/// sigmoid, went to one 35.1 mm away in the transverse colon).
 struct CenterlineTracking {
     std::vector<long> segment;
     std::size_t window_segments = 3;

@@ -164,6 +164,10 @@ TruthReadout TruthReader::read(const World& world) const {
                 const Eigen::Vector3d c = now[j] + place.weight * (now[j + 1] - now[j]);
                 const Eigen::Vector3d axis = (now[j + 1] - now[j]).normalized();
                 st.path_mm = place.path_mm;
+                const double lumen_mm = (1.0 - place.weight) * points[j].inner_radius_mm +
+                                        place.weight * points[j + 1].inner_radius_mm;
+                if (s == 0 || place.distance_mm - lumen_mm > r.scope_beyond_wall_mm)
+                    r.scope_beyond_wall_mm = place.distance_mm - lumen_mm;
                 st.displaced_path_mm = place.displaced_path_mm;
                 st.region = points[j].region;
                 Eigen::Vector3d n = c - x;

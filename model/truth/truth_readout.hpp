@@ -84,6 +84,11 @@ struct TruthReadout {
     double bow_mm = 0;                             ///< how far it moved from rest
     RegionBow region_bow_mm{};   ///< per region (kColonRegionsInOrder), its farthest move
     bool scope_crosses = false;  ///< the inserted scope crosses itself in the frontal view
+    /// How far the scope's axis lies beyond the colon wall [mm], the largest over the stations
+    /// inside: distance to the displaced centerline minus the lumen's radius there (a scope
+    /// resting on the wall: minus its own radius, 6.65 mm for the CF-Q160L). Beyond
+    /// kThroughWall_mm the scope has gone through the wall and the run is not physical.
+    double scope_beyond_wall_mm = 0;
 };
 
 /// Reads TruthReadouts off one world.
@@ -99,6 +104,11 @@ public:
     /// from this far back along the colon from where its arc allows up to 5 mm past it
     /// (World::centerline_search_window_mm; a tracked one is searched around its tracked segment).
     static constexpr double kSearchBack_mm = 400.0;
+    /// The scope's axis this far beyond the wall: through it. The distance is measured to the
+    /// displaced centerline, which the contact model only linearises: on development_scripted
+    /// (2026-11-27) runs whose station forces stayed <= 31 N read up to 28.5 mm, the one run
+    /// whose station force reached 225 N read 47.5 mm. 40 mm is six scope radii.
+    static constexpr double kThroughWall_mm = 40.0;
 
 private:
     StationLayout layout_;

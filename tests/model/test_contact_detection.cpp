@@ -83,5 +83,39 @@ TEST(ContactDetection, NodesOutsideTheBodyAreIgnored) {
     EXPECT_TRUE(detect_contacts(scope, colon_nodes(tube), tube, {}).empty());
 }
 
+// A hairpin: two straight limbs 80 mm apart joined by a 180° bend. A node tracked on the first
+// limb stays on the first limb however far it is from it at rest (the search is against the
+// colon at rest; a mobile stretch pushed away by the scope carries the node with it), even
+// where the second limb lies nearer: only its window is searched.
+TEST(ContactDetection, ATrackedNodeStaysOnItsOwnPartOfTheColonWhereverItIs) {
+    const ColonTube hairpin =
+        single_bend(200.0, 40.0, M_PI, 15.0, ColonRegion::sigmoid, kScopeRadius_mm);
+    std::vector<Eigen::Vector3d> colon;
+    for (const ColonPoint& p : hairpin.points())
+        colon.push_back(p.position_mm);
+    const std::size_t first_limb_segment = 10;  // around x = 100 mm on the first limb
+    const Eigen::Vector3d on_first = hairpin.points()[first_limb_segment].position_mm;
+    ContactDetectionSettings settings;
+    settings.activation_distance_mm = 1000.0;  // report every node
+
+    CenterlineTracking tracking;
+    tracking.segment.assign(2, static_cast<long>(first_limb_segment));
+    const Eigen::Vector3d across(0, 75.0, 0);  // 5 mm from the second limb (y = 80 mm)
+    const ScopeBeam far =
+        straight_beam(on_first + across, Eigen::Vector3d::UnitX(), 5.0, 1, cf_q160l::section());
+    const auto tracked = detect_contacts(far, colon, hairpin, settings, {}, &tracking);
+    ASSERT_EQ(tracked.size(), 2U);
+    for (const ContactCandidate& c : tracked) {
+        EXPECT_LE(c.colon_segment, first_limb_segment + 3) << "node " << c.scope_node;
+        EXPECT_NEAR(c.gap_mm, 15.0 - kScopeRadius_mm - 75.0, 1.0);  // 75 mm from its own limb
+    }
+    // Untracked, the same node is placed on the limb it is nearest to.
+    CenterlineTracking fresh;
+    const auto found = detect_contacts(far, colon, hairpin, settings, {}, &fresh);
+    ASSERT_EQ(found.size(), 2U);
+    EXPECT_GT(found[0].colon_segment, first_limb_segment + 10);
+    EXPECT_NEAR(found[0].gap_mm, 15.0 - kScopeRadius_mm - 5.0, 1.0);
+}
+
 }  // namespace
 }  // namespace scopekin::model

@@ -853,6 +853,37 @@ def check_evaluate():
     json.dump(v, open(os.path.join(d, "as_validation", "scorecard.json"), "w"))
     p = run("evaluate-tune", os.path.join(d, "as_validation"), "--out", tuned, expect_status=2)
     expect("never tuned on" in p.stderr, f"tuning on the validation set is refused: {p.stderr}")
+    # A scope that went through the colon wall (truth.csv scope_beyond_wall_mm above 40 mm; none
+    # here, so one is written in): the case is scored only before that moment, and the scorecard
+    # says so.
+    for name in names:
+        beyond = [float(r["scope_beyond_wall_mm"]) for r in rows(os.path.join(d, "cases", name, "truth.csv"))]
+        expect(max(beyond) < 40.0, f"{name}: the scope stays inside the colon: {max(beyond)} mm beyond the wall")
+    cut = os.path.join(d, "cut")
+    shutil.copytree(os.path.join(d, "cases"), os.path.join(cut, "cases"))
+    case = os.path.join(cut, "cases", names[0])
+    lines = open(os.path.join(case, "truth.csv")).read().splitlines()
+    header = lines[0].split(",")
+    column = header.index("scope_beyond_wall_mm")
+    half = len(lines) // 2
+    lost_s = float(lines[half].split(",")[0])
+    for k in range(half, len(lines)):
+        cells = lines[k].split(",")
+        cells[column] = "55"
+        lines[k] = ",".join(cells)
+    open(os.path.join(case, "truth.csv"), "w").write("\n".join(lines) + "\n")
+    run("evaluate", manifest, "--out", cut, "--score-only", "--no-plots", "--quiet")
+    score = json.load(open(os.path.join(case, "score.json")))
+    fw, truth = rows(os.path.join(case, "firmware.csv")), rows(os.path.join(case, "truth.csv"))
+    kept = [k for k, r in enumerate(truth) if float(r["time_s"]) < lost_s - 1e-9]
+    expect(abs(score["scope_through_wall_s"] - lost_s) < 1e-9 and score["periods"] == len(kept),
+           f"the cut case is scored on {score['periods']} periods, {len(kept)} before {lost_s} s")
+    rms = independent_rms([fw[k] for k in kept], [truth[k] for k in kept], "tip_path_mm", "tip_path_mm")
+    got = score["estimators"]["depth_replay"]["tip_error_mm"]["rms"]
+    expect(abs(got - rms) < 1e-6 * max(1.0, rms), f"cut case: tip error RMS {got} vs {rms} before the cut")
+    md = open(os.path.join(cut, "scorecard.md")).read()
+    expect("scored only up to where the scope went through the colon wall" in md and names[0] in md,
+           "the scorecard names the case cut short")
 
 
 def check_evaluate_bad_input():
