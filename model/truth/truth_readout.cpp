@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "model/model_error.hpp"
 #include "model/reduction/reduced_model.hpp"
@@ -148,6 +149,7 @@ TruthReadout TruthReader::read(const World& world) const {
     const std::size_t k = layout_.nodes.size();  // the stations on the scope
     r.stations.resize(layout_.stations);
     StationCompliance probe;  // increasing node order (station k-1 first), frames only
+    std::optional<double> deepest_beyond_wall_mm;  // over the stations placed on the centerline
     probe.stations.resize(k);
     for (std::size_t s = 0; s < k; ++s) {
         StationTruth& st = r.stations[s];
@@ -166,8 +168,9 @@ TruthReadout TruthReader::read(const World& world) const {
                 st.path_mm = place.path_mm;
                 const double lumen_mm = (1.0 - place.weight) * points[j].inner_radius_mm +
                                         place.weight * points[j + 1].inner_radius_mm;
-                if (s == 0 || place.distance_mm - lumen_mm > r.scope_beyond_wall_mm)
-                    r.scope_beyond_wall_mm = place.distance_mm - lumen_mm;
+                const double beyond_mm = place.distance_mm - lumen_mm;
+                deepest_beyond_wall_mm =
+                    std::max(deepest_beyond_wall_mm.value_or(beyond_mm), beyond_mm);
                 st.displaced_path_mm = place.displaced_path_mm;
                 st.region = points[j].region;
                 Eigen::Vector3d n = c - x;
@@ -186,6 +189,7 @@ TruthReadout TruthReader::read(const World& world) const {
         probe.stations[k - 1 - s].frame = st.frame;
         probe.stations[k - 1 - s].inside = st.inside;
     }
+    r.scope_beyond_wall_mm = deepest_beyond_wall_mm.value_or(0.0);
     const std::vector<Eigen::Vector3d> forces = station_forces(world, probe, k, layout_.spacing_mm);
     for (std::size_t s = 0; s < k; ++s) {
         r.stations[s].force_N = forces[s];
