@@ -159,6 +159,7 @@ void SensorBox::publish_outputs() {
         estimate.tip_path_mm = outputs_.tip_path_mm;
         estimate.tip_velocity_mm_per_s = outputs_.tip_velocity_mm_per_s;
         estimate.advance_efficiency = outputs_.advance_efficiency;
+        estimate.tip_uncertainty_mm = outputs_.tip_uncertainty_mm;
     }
     estimate.inputs_stale = inputs_stale(outputs_.fault_flags);
     estimate.depth_clamped = depth_clamped(outputs_.fault_flags);

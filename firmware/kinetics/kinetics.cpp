@@ -3,8 +3,10 @@
 //
 // Scaling and overflow: depths stay in [-50, 2000] mm after validation and the depth step is at
 // most 1000 mm/s * 1 s; the tip path is a table path (< 2000 mm) plus an elastic deviation
-// (|W| < 32 mm/N times forces < 100 N, see RANGES.md); the velocity divides a path difference
-// (< 4000 mm) by 10 periods (>= 10 * 2^-16 s) — saturating division, flagged when it saturates.
+// (|W| < 32 mm/N times forces < 100 N, see RANGES.md); the observer's tip lies in [0, 2400] mm
+// (tip_observer.hpp), so a station's path position plus the tip correction (observer - model,
+// |.| < 4500 mm) stays below 10,000 mm; the velocity divides a path difference (< 4000 mm) by 10
+// periods (>= 10 * 2^-16 s) — saturating division, flagged when it saturates.
 #include "kinetics/kinetics.hpp"
 
 #include <algorithm>
@@ -43,6 +45,7 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
         !ContactForceMonitor::valid(config.contact_force)) {
         return ConfigFault::monitors;
     }
+    if (!config.tip_observer.valid()) return ConfigFault::tip_observer;
     return ConfigFault::none;
 }
 
@@ -176,10 +179,23 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         faults |= kFaultContactResidual;
     }
 
-    // 3. Outputs.
+    // 3. The tip observer: the published tip, from the handle's evidence.
+    TipObserver::Inputs observer_inputs{};
+    observer_inputs.depth_mm = state.insertion_mm;
+    observer_inputs.handle_force_N = state.handle_force_N;
+    observer_inputs.force_fresh = (faults & kFaultForceStale) == 0U;
+    observer_inputs.period_s = config.period_s;
+    const TipObserver::Outputs observed =
+        TipObserver::step(config.tip_observer, observer_inputs, state.tip_observer);
+
+    // 4. Outputs.
     const ReducedState<Q16_16, kStationCapacity>& model = state.model;
-    outputs.tip_path_mm = model.tip_path_mm;
-    outputs.tip_velocity_mm_per_s = tip_velocity(state, model.tip_path_mm, faults);
+    outputs.tip_path_mm = observed.tip_mm;
+    outputs.tip_uncertainty_mm = observed.uncertainty_mm;
+    outputs.tip_velocity_mm_per_s = tip_velocity(state, observed.tip_mm, faults);
+    outputs.model_tip_path_mm = model.tip_path_mm;
+    // The stations stand behind the published tip as they stand behind the model's on the scope.
+    const Q16_16 tip_correction_mm = observed.tip_mm - model.tip_path_mm;
     outputs.active_stations = static_cast<std::uint8_t>(model.active_stations);
     const Q16_16 spacing = config.tables->header().station_spacing_mm;
     for (std::size_t j = 0; j < kStationCapacity; ++j) {  // bound: kStationCapacity
@@ -187,7 +203,8 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         StationEstimate& out = outputs.stations[j];
         const auto& f = model.force_N[j];
         out.arc_from_tip_mm = spacing * Q16_16::from_int(static_cast<int>(j));
-        out.path_position_mm = model.reference_path_mm[j] + model.elastic_mm[j][1];
+        out.path_position_mm =
+            model.reference_path_mm[j] + model.elastic_mm[j][1] + tip_correction_mm;
         // A passive station's resultant can pull (f_n < 0: its stretch presses on opposite
         // walls, reduced_kinetics.hpp "Passive stations"); the published normal force is the
         // push on the station's own wall, >= 0, and the magnitude is the whole resultant's.
@@ -210,7 +227,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         faults |= kFaultSaturation;
     }
 
-    // 4. Monitors.
+    // 5. Monitors (on the reduced model: kinetics.hpp, step 5).
     const AdvanceEfficiency<>::Outputs efficiency =
         state.efficiency.step({model.tip_path_mm, state.insertion_mm});
     outputs.advance_efficiency = efficiency.efficiency;

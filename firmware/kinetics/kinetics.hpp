@@ -11,12 +11,16 @@
 //      and the insertion depth is rate-limited; each fault sets its Outputs::fault_flags bit.
 //   2. The reduced-order model (reduced_kinetics.hpp) at the validated depth: the Gauss-Seidel
 //      contact solve of the stations in Q16.16, a fixed number of sweeps and local iterations.
-//   3. Outputs: the tip's position along the colon and its velocity (mean over the last
-//      kVelocityWindow steps, so it lags by half that window), each station's forces and stick /
-//      slip state, the largest contact force and where it acts.
-//   4. Monitors (firmware/monitors): advance efficiency, self-lock (the tip station stuck while
+//   3. The tip observer (tip_observer.hpp): the tip along the colon from the handle's evidence
+//      (depth and push force), with its uncertainty, at every depth.
+//   4. Outputs: the observer's tip, its uncertainty and its velocity (mean over the last
+//      kVelocityWindow steps, so it lags by half that window); the reduced model's own tip
+//      (model_tip_path_mm); each station's forces and stick / slip state, placed behind the
+//      published tip as on the scope; the largest contact force and where it acts.
+//   5. Monitors (firmware/monitors): advance efficiency, self-lock (the tip station stuck while
 //      the handle advances, T_on = 36 steps; confirmed by falling efficiency), contact-force
-//      warning / critical.
+//      warning / critical. They read the reduced model (its tip and stick states, on which the
+//      self-lock monitor was designed and verified), not the observer.
 //
 // Bad input (Config limits; all Q16.16):
 //   * no fresh sample: the last valid value is held and the signal's "stale" flag is set for as
@@ -38,6 +42,7 @@
 #include "kinetics/kinetics_io.hpp"
 #include "kinetics/reduced_kinetics.hpp"
 #include "kinetics/reduced_tables.hpp"
+#include "kinetics/tip_observer.hpp"
 #include "monitors/advance_efficiency.hpp"
 #include "monitors/contact_force_monitor.hpp"
 #include "monitors/self_lock_monitor.hpp"
@@ -80,6 +85,7 @@ struct Config {
     /// where no loop forms, and 41 steps at the first stall of the sigmoid loop).
     monitors::SelfLockMonitor::Config self_lock{kSelfLockConfig};
     monitors::ContactForceMonitor::Config contact_force{};
+    TipObserver::Config tip_observer{};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
@@ -90,6 +96,7 @@ enum class ConfigFault : std::uint8_t {
     limits,            ///< an input range empty or a limit not positive
     tables,            ///< the reduced model's tables failed check_reduced_tables
     monitors,          ///< a monitor refused its Config
+    tip_observer,      ///< the tip observer refused its Config
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
@@ -111,6 +118,7 @@ struct State {
     monitors::AdvanceEfficiency<> efficiency{};
     monitors::SelfLockMonitor self_lock{};
     monitors::ContactForceMonitor contact_force{};
+    TipObserver::State tip_observer{};
 };
 
 void init(const Config& config, State& state) noexcept;

@@ -68,9 +68,9 @@ enum FaultFlag : std::uint32_t {
     kFaultRollRange = 1U << 8U,
     kFaultContactResidual = 1U << 9U,  ///< the contact solve left a residual above its bound
     kFaultSaturation = 1U << 10U,      ///< an internal quantity hit its fixed-point limit
-    kFaultDepthOutsideModel =
-        1U
-        << 11U,  ///< depth outside the reduced model's travel run in use (default 20..760 mm): clamped to it
+    /// Depth outside the reduced model's travel run in use (default 20..760 mm): the model (its
+    /// stations, forces and monitors) is clamped to it; the published tip (the observer) is not.
+    kFaultDepthOutsideModel = 1U << 11U,
     kFaultConfig = 1U << 12U,        ///< init refused the configuration: no estimate
     kFaultMonitorInput = 1U << 13U,  ///< a monitor rejected its input (held its output)
 };
@@ -99,8 +99,10 @@ enum class ContactForceLevel : std::uint8_t {
 
 struct Outputs {
     std::uint32_t step_index{0};
-    Q16_16 tip_path_mm{};            ///< tip position along the colon centerline
+    Q16_16 tip_path_mm{};         ///< tip position along the colon centerline (the tip observer's)
+    Q16_16 tip_uncertainty_mm{};  ///< one standard deviation of tip_path_mm
     Q16_16 tip_velocity_mm_per_s{};  ///< d/dt of tip_path_mm
+    Q16_16 model_tip_path_mm{};      ///< the reduced model's tip (what the monitors read)
     Q16_16 advance_efficiency{};     ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};
     std::uint8_t active_stations{0};  ///< stations inside the colon this step

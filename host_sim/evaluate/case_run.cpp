@@ -170,6 +170,8 @@ static void cut_where_the_scope_went_through_the_wall(CaseRun& run, double lost_
     cut(run.true_max_station_force_N);
     cut(run.insertion_mm);
     cut(run.box_tip_path_mm);
+    cut(run.box_model_tip_path_mm);
+    cut(run.box_tip_uncertainty_mm);
     cut(run.box_max_contact_force_N);
     cut(run.box_self_lock);
     cut(run.box_contact_level);
@@ -253,6 +255,13 @@ CaseRun read_case_run(const fs::path& folder) {
     run.box_self_lock = whole<std::uint8_t>(fw, 3, fw_file, "self_lock_alarm");
     run.box_contact_level = whole<std::uint8_t>(fw, 4, fw_file, "contact_force_level");
     run.box_fault_flags = whole<std::uint32_t>(fw, 5, fw_file, "fault_flags");
+    if (has_column(fw_file, "model_tip_path_mm")) {  // written since the tip observer
+        const Columns observer = read_columns(fw_file, {"tip_uncertainty_mm", "model_tip_path_mm"});
+        run.box_tip_uncertainty_mm = numbers(observer, 0, fw_file, "tip_uncertainty_mm");
+        run.box_model_tip_path_mm = numbers(observer, 1, fw_file, "model_tip_path_mm");
+    } else {
+        run.box_model_tip_path_mm = run.box_tip_path_mm;
+    }
     for (std::size_t k = 1; k < run.time_s.size(); ++k)
         if (!(run.time_s[k] > run.time_s[k - 1]))
             throw CaseDataError(truth_file.string() + ": line " + std::to_string(truth.lines[k]) +

@@ -54,7 +54,11 @@ struct CaseRun {
     /// episode still up then is up at the end). Unset: the whole run.
     std::optional<double> scope_through_wall_s;
     // firmware.csv: the box's outputs
-    std::vector<double> box_tip_path_mm;
+    std::vector<double> box_tip_path_mm;  ///< the published tip (the tip observer's)
+    /// The reduced model's tip (column model_tip_path_mm); runs written before the tip observer
+    /// lack the column, and their published tip was the model's.
+    std::vector<double> box_model_tip_path_mm;
+    std::vector<double> box_tip_uncertainty_mm;  ///< one SD; empty for runs before the observer
     std::vector<double> box_max_contact_force_N;
     std::vector<std::uint8_t> box_self_lock;
     std::vector<std::uint8_t> box_contact_level;

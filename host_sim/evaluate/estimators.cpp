@@ -7,11 +7,12 @@
 namespace scopekin::evaluate {
 namespace {
 
-/// (a) The firmware as it is today: the depth-indexed replay of the reduced model's training
-/// runs; its outputs are firmware.csv.
-EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext&) {
+/// (a) The box as it is: firmware.csv's published outputs — the tip observer's tip and its
+/// uncertainty; the largest contact force, the alarms and the faults from the reduced model.
+EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     EstimatorOutput o;
     o.tip_path_mm = run.box_tip_path_mm;
+    o.tip_uncertainty_mm = run.box_tip_uncertainty_mm;
     o.max_force_N = run.box_max_contact_force_N;
     o.loop_alarm = run.box_self_lock;
     o.contact_level = run.box_contact_level;
@@ -19,7 +20,16 @@ EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext&) {
     return o;
 }
 
-/// (b) The handle force monitor (force_monitor.hpp): alarms only.
+/// (b) The depth replay: the reduced model's own tip (firmware.csv model_tip_path_mm), the box's
+/// published tip until the tip observer; its forces and alarms are the box's (a).
+EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext& context) {
+    EstimatorOutput o = box(run, context);
+    o.tip_path_mm = run.box_model_tip_path_mm;
+    o.tip_uncertainty_mm.clear();
+    return o;
+}
+
+/// (c) The handle force monitor (force_monitor.hpp): alarms only.
 EstimatorOutput handle_force_monitor(const CaseRun& run, const EstimatorContext& context) {
     const ForceMonitorFeatures f = force_monitor_features(run);
     const ForceMonitorThresholds& t = context.force_monitor;
@@ -29,7 +39,7 @@ EstimatorOutput handle_force_monitor(const CaseRun& run, const EstimatorContext&
     return o;
 }
 
-/// (c) Insertion depth as the tip: the tip put at the measured insertion along the colon, as if
+/// (d) Insertion depth as the tip: the tip put at the measured insertion along the colon, as if
 /// the scope ran straight down the centerline with no slack; no force estimate, no alarms. The
 /// simplest tip estimate that covers the whole procedure in every patient: what any estimator
 /// must beat on tip position before its model earns anything (issue 21).
@@ -47,7 +57,9 @@ EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
 
 const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
-        {"depth_replay", "today's estimator (depth replay)", depth_replay},
+        {"box", "the box (tip observer; forces and alarms from the reduced model)", box},
+        {"depth_replay", "depth replay (the reduced model's tip; forces and alarms as the box's)",
+         depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},
         {"insertion_depth", "insertion depth as the tip (baseline, no alarms)", insertion_depth},
     };

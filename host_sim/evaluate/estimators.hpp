@@ -20,8 +20,9 @@
 namespace scopekin::evaluate {
 
 struct EstimatorOutput {
-    std::vector<double> tip_path_mm;  ///< empty: not estimated
-    std::vector<double> max_force_N;  ///< empty: not estimated
+    std::vector<double> tip_path_mm;         ///< empty: not estimated
+    std::vector<double> tip_uncertainty_mm;  ///< one SD of tip_path_mm; empty: not stated
+    std::vector<double> max_force_N;         ///< empty: not estimated
     std::vector<std::uint8_t> loop_alarm;
     std::vector<std::uint8_t> contact_level;  ///< 0 normal, 1 warning (>= 10 N), 2 critical
     std::vector<std::uint32_t> fault_flags;   ///< kinetics FaultFlag bits; empty: none

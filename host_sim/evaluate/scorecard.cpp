@@ -34,6 +34,21 @@ double get(const Json& j, const char* key) {
     return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : kNaN;
 }
 
+/// How often the truth lies within the stated uncertainty: the share of periods with
+/// |estimate - truth| <= 1 SD and <= 2 SD (a Gaussian error: 68 % and 95 %).
+Json within_sd_json(const std::vector<double>& estimate, const std::vector<double>& sd,
+                    const std::vector<double>& truth) {
+    std::size_t one = 0, two = 0, periods = 0;
+    for (std::size_t k = 0; k < estimate.size() && k < sd.size() && k < truth.size(); ++k) {
+        const double error = std::abs(estimate[k] - truth[k]);
+        if (std::isnan(error) || std::isnan(sd[k])) continue;
+        ++periods;
+        if (error <= sd[k]) ++one;
+        if (error <= 2.0 * sd[k]) ++two;
+    }
+    return {{"periods", periods}, {"within_1_sd", one}, {"within_2_sd", two}};
+}
+
 Json error_json(const ErrorScore& e) {
     if (e.periods == 0) return nullptr;
     return Json{{"rms", num(e.rms)},
@@ -138,6 +153,10 @@ Json score_case(const std::string& name, const std::string& style, const std::st
                 o.tip_path_mm.empty()
                     ? Json()
                     : error_json(score_error(run.time_s, o.tip_path_mm, run.true_tip_path_mm));
+            j["tip_within_sd"] =
+                o.tip_uncertainty_mm.empty()
+                    ? Json()
+                    : within_sd_json(o.tip_path_mm, o.tip_uncertainty_mm, run.true_tip_path_mm);
             j["force_error_N"] = o.max_force_N.empty()
                                      ? Json()
                                      : error_json(score_error(run.time_s, o.max_force_N,
@@ -248,6 +267,23 @@ Json aggregate(const std::vector<Json>& cases) {
             tip_max.push_back(get(s["tip_error_mm"], "max"));
             force_rms.push_back(get(s["force_error_N"], "rms"));
         }
+        std::size_t sd_periods = 0, sd_one = 0, sd_two = 0;
+        for (const Json& c : cases) {
+            if (!c.contains("estimators") || !c["estimators"].contains(e.name)) continue;
+            const Json& w = c["estimators"][e.name]["tip_within_sd"];
+            if (!w.is_object()) continue;
+            sd_periods += w.value("periods", std::size_t{0});
+            sd_one += w.value("within_1_sd", std::size_t{0});
+            sd_two += w.value("within_2_sd", std::size_t{0});
+        }
+        const auto sd_share = [sd_periods](std::size_t n) {
+            return num(sd_periods > 0 ? static_cast<double>(n) / static_cast<double>(sd_periods)
+                                      : kNaN);
+        };
+        j["tip_within_sd"] = sd_periods == 0 ? Json()
+                                             : Json{{"periods", sd_periods},
+                                                    {"within_1_sd_share", sd_share(sd_one)},
+                                                    {"within_2_sd_share", sd_share(sd_two)}};
         j["tip_error_rms_mm"] = distribution_json(tip_rms);
         j["tip_error_max_mm"] = distribution_json(tip_max);
         j["force_error_rms_N"] = distribution_json(force_rms);
@@ -371,7 +407,7 @@ Json aggregate(const std::vector<Json>& cases) {
     }
     overall["procedure"] = procedure;
 
-    // The worst cases: by today's estimator's tip error (the first estimator with a tip), then
+    // The worst cases: by the box's tip error (the first estimator with a tip), then
     // by missed loop episodes.
     std::vector<std::pair<double, std::string>> ranked;
     for (const Json& c : cases) {
@@ -510,6 +546,17 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
              [](const Json& e) -> const Json& { return e["tip_error_rms_mm"]; });
     dist_row("tip position error, max [mm]",
              [](const Json& e) -> const Json& { return e["tip_error_max_mm"]; });
+    md << "| tip within its stated uncertainty, 1 SD / 2 SD (pooled periods; Gaussian: 68 / 95 %) "
+          "|";
+    for (const Json& e : estimators) {
+        const Json& w = e["tip_within_sd"];
+        if (!w.is_object())
+            md << " n/a |";
+        else
+            md << " " << fmt(100.0 * get(w, "within_1_sd_share"), "%.0f") << " / "
+               << fmt(100.0 * get(w, "within_2_sd_share"), "%.0f") << " % |";
+    }
+    md << "\n";
     dist_row("largest contact force error, RMS [N]",
              [](const Json& e) -> const Json& { return e["force_error_rms_N"]; });
     for (const AlarmKind& kind : kAlarms) {
@@ -573,7 +620,7 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
                    << " mm: " << b.value("cases", std::size_t{0}) << ";";
         md << "\n";
     }
-    md << "\nWorst cases (by today's estimator's tip error):";
+    md << "\nWorst cases (by the box's tip error):";
     for (const Json& w : overall["worst_cases"])
         md << " " << w.get<std::string>();
     md << "\n";

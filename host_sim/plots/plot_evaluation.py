@@ -8,8 +8,8 @@ distributions.png: per measure, one box plot per estimator over the cases (score
 position error RMS and max, largest contact force error RMS, loop alarm latency, false loop
 alarms per 10 min, share of loop and contact force episodes detected within 0.5 s); a dot per
 case on top of each box.
-worst_cases.png: the three worst cases (scorecard.json "overall.worst_cases": by today's
-estimator's tip error), one column each, from the case's estimates.csv: the true and estimated
+worst_cases.png: the three worst cases (scorecard.json "overall.worst_cases": by the box's
+tip error), one column each, from the case's estimates.csv: the true and estimated
 tip along the colon; the true loop episodes (shaded) with each estimator's loop alarm; the
 true largest station force with the estimated one and each estimator's contact level.
 procedures.png (physician cases only): the insertion at cecal intubation, a histogram per style
@@ -193,7 +193,7 @@ def plot_worst(directory, scorecard, path):
         ax_force.set_ylabel("force [N]")
         ax_force.set_xlabel("time [s]")
         ax_force.legend(fontsize=6.5, loc="upper left")
-    fig.suptitle("The worst cases (by today's estimator's tip error)", fontsize=11)
+    fig.suptitle("The worst cases (by the box's tip error)", fontsize=11)
     save(fig, path)
 
 

@@ -30,7 +30,7 @@ std::string firmware_csv_header() {
         h += "," + s + "arc_mm," + s + "path_mm," + s + "normal_N," + s + "tangential_N," + s +
              "state";
     }
-    return h + ",box_faults,tracker_faults";
+    return h + ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm";
 }
 
 std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
@@ -60,6 +60,8 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
     }
     put_u(line, box_faults);
     put_u(line, tracker_faults);
+    put_q(line, o.tip_uncertainty_mm);
+    put_q(line, o.model_tip_path_mm);
     return line;
 }
 

@@ -55,7 +55,7 @@ bool same(const protocol::KineticEstimate& a, const protocol::KineticEstimate& b
     return a.tip_path_mm == b.tip_path_mm && a.tip_velocity_mm_per_s == b.tip_velocity_mm_per_s &&
            a.advance_efficiency == b.advance_efficiency && a.estimate_valid == b.estimate_valid &&
            a.inputs_stale == b.inputs_stale && a.depth_clamped == b.depth_clamped &&
-           a.step_counter == b.step_counter;
+           a.tip_uncertainty_mm == b.tip_uncertainty_mm && a.step_counter == b.step_counter;
 }
 bool same(const protocol::ContactSummary& a, const protocol::ContactSummary& b) {
     return a.max_contact_force_N == b.max_contact_force_N &&

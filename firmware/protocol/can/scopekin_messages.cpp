@@ -44,8 +44,10 @@ constexpr CanSignal kEfficiency{"AdvanceEfficiency", 32, 16, true, 1, 1000};
 constexpr CanSignal kValid{"EstimateValid", 48, 1, false, 1, 1};
 constexpr CanSignal kStale{"InputsStale", 49, 1, false, 1, 1};
 constexpr CanSignal kClamped{"DepthClamped", 50, 1, false, 1, 1};
+constexpr CanSignal kTipUncertainty{"TipUncertainty", 51, 5, false, 10, 1};
 constexpr CanSignal kStep{"StepCounter", 56, 8, false, 1, 1};
-constexpr std::array kSignals{kTipPath, kTipVelocity, kEfficiency, kValid, kStale, kClamped, kStep};
+constexpr std::array kSignals{kTipPath, kTipVelocity, kEfficiency,     kValid,
+                              kStale,   kClamped,     kTipUncertainty, kStep};
 constexpr std::uint8_t kLength = 8;
 }  // namespace kinetic_estimate
 
@@ -267,6 +269,7 @@ hal::CanFrame encode(const KineticEstimate& message) {
     put_integer(frame, kValid, message.estimate_valid ? 1 : 0);
     put_integer(frame, kStale, message.inputs_stale ? 1 : 0);
     put_integer(frame, kClamped, message.depth_clamped ? 1 : 0);
+    put_q16(frame, kTipUncertainty, message.tip_uncertainty_mm);
     put_integer(frame, kStep, message.step_counter);
     return frame;
 }
@@ -285,6 +288,7 @@ DecodeResult decode(const hal::CanFrame& frame, KineticEstimate& message) {
     decoded.estimate_valid = get_flag(frame, kValid);
     decoded.inputs_stale = get_flag(frame, kStale);
     decoded.depth_clamped = get_flag(frame, kClamped);
+    decoded.tip_uncertainty_mm = get_q16(frame, kTipUncertainty, saturated);
     decoded.step_counter = get_unsigned<std::uint8_t>(frame, kStep);
     if (saturated) {
         return DecodeResult::out_of_range;

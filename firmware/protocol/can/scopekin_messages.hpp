@@ -88,6 +88,7 @@ struct KineticEstimate {
     bool estimate_valid{false};
     bool inputs_stale{false};
     bool depth_clamped{false};
+    Q16_16 tip_uncertainty_mm{};  ///< 10 mm, 0..310 (saturates): one SD of tip_path_mm (1.1)
     std::uint8_t step_counter{0};
 };
 

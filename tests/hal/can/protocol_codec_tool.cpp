@@ -83,6 +83,7 @@ void bind(Visitor& v, KineticEstimate& m) {
     v.flag("EstimateValid", m.estimate_valid);
     v.flag("InputsStale", m.inputs_stale);
     v.flag("DepthClamped", m.depth_clamped);
+    v.q16("TipUncertainty", m.tip_uncertainty_mm);
     v.integer("StepCounter", m.step_counter);
 }
 

@@ -68,6 +68,23 @@ SCOPEKIN_TEST(CanProtocol, KineticEstimateBytesByHand) {
     SCOPEKIN_EXPECT_TRUE(bytes_are(frame, {0x03, 0x14, 0x38, 0xFF, 0xEE, 0x02, 0x03, 0xAB}));
 }
 
+// TipUncertainty (1.1): bits 51-55 at 10 mm. 120 mm -> 12 -> byte 6 = 12 << 3 | 0x03 = 0x63; 400 mm
+// is beyond the 5 bits and saturates at 31 (310 mm) -> 0xFB. Decoding gives the 10 mm step back.
+SCOPEKIN_TEST(CanProtocol, KineticEstimateTipUncertaintyBytesByHand) {
+    protocol::KineticEstimate message{};
+    message.estimate_valid = true;
+    message.inputs_stale = true;
+    message.tip_uncertainty_mm = Q16_16::from_int(120);
+    CanFrame frame = protocol::encode(message);
+    SCOPEKIN_EXPECT_TRUE(bytes_are(frame, {0, 0, 0, 0, 0, 0, 0x63, 0}));
+    protocol::KineticEstimate decoded{};
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(frame, decoded) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_EQ(decoded.tip_uncertainty_mm.raw(), Q16_16::from_int(120).raw());
+    message.tip_uncertainty_mm = Q16_16::from_int(400);
+    frame = protocol::encode(message);
+    SCOPEKIN_EXPECT_TRUE(bytes_are(frame, {0, 0, 0, 0, 0, 0, 0xFB, 0}));
+}
+
 // SelfLockAlarm 1 (bit 0), ContactForceLevel 2 (bits 1-2: 0b100), AlarmsValid 1 (bit 3) ->
 // byte 0 = 0x0D; SelfLockRaised 3, CriticalRaised 1, StepCounter 7.
 SCOPEKIN_TEST(CanProtocol, AlarmsBytesByHand) {

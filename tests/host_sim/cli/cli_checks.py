@@ -556,7 +556,8 @@ def check_box_faults():
     sim_dir = os.path.dirname(rec)
     fw = rows(os.path.join(sim_dir, "firmware.csv"))
     header = open(os.path.join(sim_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-2:] == ["box_faults", "tracker_faults"], f"the new columns come last: {header[-3:]}")
+    expect(header[-4:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm"],
+           f"the new columns come last: {header[-5:]}")
     expect(header[:13] == ["time_s", "step_index", "tip_path_mm", "tip_velocity_mm_per_s", "advance_efficiency",
                            "active_stations", "max_contact_force_N", "max_contact_station", "max_contact_path_mm",
                            "distal_sticking", "self_lock_alarm", "contact_force_level", "fault_flags"],
@@ -567,7 +568,8 @@ def check_box_faults():
     run_dir = os.path.join(d, "run")
     run("run", rec, "--out", run_dir, "--quiet")
     header = open(os.path.join(run_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-2:] == ["box_faults", "tracker_faults"], f"run's firmware.csv ends with the new columns: {header[-3:]}")
+    expect(header[-4:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm"],
+           f"run's firmware.csv ends with the new columns: {header[-5:]}")
     s = json.load(open(os.path.join(run_dir, "summary.json")))
     expect(s.get("box", {}).get("counters", {}).get("periods") == len(rows(os.path.join(run_dir, "firmware.csv"))),
            f"run's box section counts its periods: {str(s.get('box'))[:300]}")
@@ -780,10 +782,12 @@ def check_evaluate():
     expect(card["overall"]["scored"] == len(names), f"every case scored: {card['overall']['not_scored']}")
     table = rows(os.path.join(d, "scorecard.csv"))
     expect(sorted((r["case"], r["estimator"]) for r in table) ==
-           sorted((n, e) for n in names for e in ["depth_replay", "force_monitor", "insertion_depth"]), "one CSV row per case x estimator")
-    # The scores against the run's own files, computed again here: the tip error of today's
-    # estimator (firmware.csv against truth.csv, joined row by row), its loop alarm against the
-    # true loop episodes of summary.json.
+           sorted((n, e) for n in names for e in ["box", "depth_replay", "force_monitor", "insertion_depth"]),
+           "one CSV row per case x estimator")
+    # The scores against the run's own files, computed again here: the tip error of the box
+    # (firmware.csv's published tip against truth.csv, joined row by row) and of the depth replay
+    # (firmware.csv's model_tip_path_mm), the box's tip within its stated SD, its loop alarm
+    # against the true loop episodes of summary.json.
     episodes_seen = 0
     for name in names:
         case = os.path.join(d, "cases", name)
@@ -791,10 +795,19 @@ def check_evaluate():
         summary = json.load(open(os.path.join(case, "summary.json")))
         score = json.load(open(os.path.join(case, "score.json")))["estimators"]
         rms = independent_rms(fw, truth, "tip_path_mm", "tip_path_mm")
-        got = score["depth_replay"]["tip_error_mm"]["rms"]
+        got = score["box"]["tip_error_mm"]["rms"]
         expect(abs(got - rms) < 1e-6 * max(1.0, rms), f"{name}: tip error RMS {got} vs {rms} computed here")
+        rms = independent_rms(fw, truth, "model_tip_path_mm", "tip_path_mm")
+        got = score["depth_replay"]["tip_error_mm"]["rms"]
+        expect(abs(got - rms) < 1e-6 * max(1.0, rms), f"{name}: replay tip error RMS {got} vs {rms} computed here")
+        within = [abs(float(f["tip_path_mm"]) - float(t["tip_path_mm"])) <= float(f["tip_uncertainty_mm"])
+                  for f, t in zip(fw, truth)]
+        w = score["box"]["tip_within_sd"]
+        expect(w["periods"] == len(fw) and w["within_1_sd"] == sum(within),
+               f"{name}: tip within 1 SD {w} vs {sum(within)} of {len(fw)} computed here")
+        expect(score["depth_replay"]["tip_within_sd"] is None, f"{name}: the replay states no uncertainty")
         force = independent_rms(fw, truth, "max_contact_force_N", "max_station_force_N")
-        expect(abs(score["depth_replay"]["force_error_N"]["rms"] - force) < 1e-6 * max(1.0, force),
+        expect(abs(score["box"]["force_error_N"]["rms"] - force) < 1e-6 * max(1.0, force),
                f"{name}: force error RMS")
         expect(score["force_monitor"]["tip_error_mm"] is None, f"{name}: the force monitor has no tip estimate")
         # The insertion-depth baseline: the tip at the last insertion sample at or before each period.
@@ -810,14 +823,14 @@ def check_evaluate():
         loops = summary["truth"]["loop_episodes"]
         episodes_seen += len(loops)
         detected, false_alarms = independent_detections(times, [r["self_lock_alarm"] == "1" for r in fw], loops)
-        a = score["depth_replay"]["loop_alarm"]
+        a = score["box"]["loop_alarm"]
         expect((a["episodes"], a["detected"], a["false_alarms"]) == (len(loops), detected, false_alarms),
                f"{name}: loop alarm {a['episodes']}, {a['detected']}, {a['false_alarms']} vs "
                f"{len(loops)}, {detected}, {false_alarms} computed here")
         warnings = summary["truth"]["force_episodes"]["warning_10N"]
         detected, false_alarms = independent_detections(times, [r["contact_force_level"] in ("1", "2") for r in fw],
                                                         warnings)
-        a = score["depth_replay"]["warning_alarm"]
+        a = score["box"]["warning_alarm"]
         expect((a["episodes"], a["detected"], a["false_alarms"]) == (len(warnings), detected, false_alarms),
                f"{name}: 10 N alarm vs computed here")
     expect(episodes_seen >= 1, "the smoke set has at least one true loop episode")
@@ -879,7 +892,7 @@ def check_evaluate():
     expect(abs(score["scope_through_wall_s"] - lost_s) < 1e-9 and score["periods"] == len(kept),
            f"the cut case is scored on {score['periods']} periods, {len(kept)} before {lost_s} s")
     rms = independent_rms([fw[k] for k in kept], [truth[k] for k in kept], "tip_path_mm", "tip_path_mm")
-    got = score["estimators"]["depth_replay"]["tip_error_mm"]["rms"]
+    got = score["estimators"]["box"]["tip_error_mm"]["rms"]
     expect(abs(got - rms) < 1e-6 * max(1.0, rms), f"cut case: tip error RMS {got} vs {rms} before the cut")
     md = open(os.path.join(cut, "scorecard.md")).read()
     expect("scored only up to where the scope went through the colon wall" in md and names[0] in md,

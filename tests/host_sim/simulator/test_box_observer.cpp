@@ -56,11 +56,13 @@ TEST(BoxObserver, BoxFaultBitsAreCountedWithTheirFirstTime) {
 
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), 7U);
-    EXPECT_EQ(last_cells(lines[0], 2), "box_faults,tracker_faults");
-    EXPECT_EQ(last_cells(lines[1], 2), "0,0");
-    EXPECT_EQ(last_cells(lines[2], 2), "64,0");
-    EXPECT_EQ(last_cells(lines[3], 2), "16448,0");  // 64 + 16384
-    EXPECT_EQ(last_cells(lines[6], 2), "0,0");
+    // box_faults, tracker_faults, then the two columns added after them (zero outputs here).
+    EXPECT_EQ(last_cells(lines[0], 4),
+              "box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm");
+    EXPECT_EQ(last_cells(lines[1], 4), "0,0,0.00000,0.00000");
+    EXPECT_EQ(last_cells(lines[2], 4), "64,0,0.00000,0.00000");
+    EXPECT_EQ(last_cells(lines[3], 4), "16448,0,0.00000,0.00000");  // 64 + 16384
+    EXPECT_EQ(last_cells(lines[6], 4), "0,0,0.00000,0.00000");
 }
 
 TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {
@@ -96,7 +98,9 @@ TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), tracker.size() + 1);
     for (std::size_t k = 0; k < tracker.size(); ++k)
-        EXPECT_EQ(last_cells(lines[k + 1], 1), std::to_string(tracker[k])) << "period " << k;
+        EXPECT_EQ(last_cells(lines[k + 1], 3).substr(0, last_cells(lines[k + 1], 3).find(',')),
+                  std::to_string(tracker[k]))
+            << "period " << k << " (tracker_faults: the third column from the end)";
 }
 
 }  // namespace
