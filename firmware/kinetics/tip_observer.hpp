@@ -34,8 +34,8 @@
 //     pleated onto the scope) and max_slack_mm behind it (the longest loop).
 // The four numbers (15 N, 45 N, 0.5, 0.05 /s) are physical quantities, the same in every patient.
 // They lie in the middle of the plateau of a grid search on the development set (26 cases; the
-// grid's best points were 1-3 mm better in median and within 10 mm at the 90th percentile) and
-// were never fitted on the validation set.
+// grid's best points were up to 6 mm better at the median or at the 90th percentile, not both)
+// and were never fitted on the validation set.
 //
 // How sure it is
 // --------------

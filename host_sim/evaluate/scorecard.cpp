@@ -34,6 +34,13 @@ double get(const Json& j, const char* key) {
     return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : kNaN;
 }
 
+/// j[key], or null when j is not an object or has no such member (a const operator[] on a
+/// missing key is undefined: scores written before a member existed lack it).
+const Json& member(const Json& j, const char* key) {
+    static const Json null_json;
+    return j.is_object() && j.contains(key) ? j[key] : null_json;
+}
+
 /// How often the truth lies within the stated uncertainty: the share of periods with
 /// |estimate - truth| <= 1 SD and <= 2 SD (a Gaussian error: 68 % and 95 %).
 Json within_sd_json(const std::vector<double>& estimate, const std::vector<double>& sd,
@@ -270,7 +277,7 @@ Json aggregate(const std::vector<Json>& cases) {
         std::size_t sd_periods = 0, sd_one = 0, sd_two = 0;
         for (const Json& c : cases) {
             if (!c.contains("estimators") || !c["estimators"].contains(e.name)) continue;
-            const Json& w = c["estimators"][e.name]["tip_within_sd"];
+            const Json& w = member(c["estimators"][e.name], "tip_within_sd");
             if (!w.is_object()) continue;
             sd_periods += w.value("periods", std::size_t{0});
             sd_one += w.value("within_1_sd", std::size_t{0});
@@ -549,7 +556,7 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
     md << "| tip within its stated uncertainty, 1 SD / 2 SD (pooled periods; Gaussian: 68 / 95 %) "
           "|";
     for (const Json& e : estimators) {
-        const Json& w = e["tip_within_sd"];
+        const Json& w = member(e, "tip_within_sd");
         if (!w.is_object())
             md << " n/a |";
         else
