@@ -233,9 +233,16 @@ CaseRun read_case_run(const fs::path& folder) {
     if (beyond_wall) truth_columns.emplace_back("scope_beyond_wall_mm");
     const Columns truth = read_columns(truth_file, truth_columns);
     const fs::path fw_file = folder / "firmware.csv";
-    const Columns fw =
-        read_columns(fw_file, {"time_s", "tip_path_mm", "max_contact_force_N", "self_lock_alarm",
-                               "contact_force_level", "fault_flags"});
+    // tip_uncertainty_mm, model_tip_path_mm: written since the tip observer (2026-11-27).
+    const bool observer = has_column(fw_file, "model_tip_path_mm");
+    std::vector<std::string> fw_columns{
+        "time_s",          "tip_path_mm",         "max_contact_force_N",
+        "self_lock_alarm", "contact_force_level", "fault_flags"};
+    if (observer) {
+        fw_columns.emplace_back("tip_uncertainty_mm");
+        fw_columns.emplace_back("model_tip_path_mm");
+    }
+    const Columns fw = read_columns(fw_file, fw_columns);
     if (truth.lines.size() != fw.lines.size())
         throw CaseDataError(truth_file.string() + " has " + std::to_string(truth.lines.size()) +
                             " rows, " + fw_file.string() + " " + std::to_string(fw.lines.size()) +
@@ -255,11 +262,10 @@ CaseRun read_case_run(const fs::path& folder) {
     run.box_self_lock = whole<std::uint8_t>(fw, 3, fw_file, "self_lock_alarm");
     run.box_contact_level = whole<std::uint8_t>(fw, 4, fw_file, "contact_force_level");
     run.box_fault_flags = whole<std::uint32_t>(fw, 5, fw_file, "fault_flags");
-    if (has_column(fw_file, "model_tip_path_mm")) {  // written since the tip observer
-        const Columns observer = read_columns(fw_file, {"tip_uncertainty_mm", "model_tip_path_mm"});
-        run.box_tip_uncertainty_mm = numbers(observer, 0, fw_file, "tip_uncertainty_mm");
-        run.box_model_tip_path_mm = numbers(observer, 1, fw_file, "model_tip_path_mm");
-    } else {
+    if (observer) {
+        run.box_tip_uncertainty_mm = numbers(fw, 6, fw_file, "tip_uncertainty_mm");
+        run.box_model_tip_path_mm = numbers(fw, 7, fw_file, "model_tip_path_mm");
+    } else {  // before the tip observer the published tip was the model's
         run.box_model_tip_path_mm = run.box_tip_path_mm;
     }
     for (std::size_t k = 1; k < run.time_s.size(); ++k)
