@@ -194,6 +194,7 @@ void SensorBox::publish_outputs() {
     alarms.self_lock = estimator_ok_ && outputs_.self_lock_alarm;
     alarms.contact_force_level =
         estimator_ok_ ? static_cast<std::uint8_t>(outputs_.contact_force_level) : 0U;
+    alarms.tip_from_model = estimator_ok_ && outputs_.tip_from_model;
     alarms.self_lock_raised = self_lock_raised_;
     alarms.critical_raised = critical_raised_;
     alarms.step_counter = step_counter;

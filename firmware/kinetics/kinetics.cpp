@@ -46,6 +46,7 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
         return ConfigFault::monitors;
     }
     if (!config.tip_observer.valid()) return ConfigFault::tip_observer;
+    if (!config.model_evidence.valid()) return ConfigFault::model_evidence;
     return ConfigFault::none;
 }
 
@@ -125,6 +126,26 @@ Q16_16 tip_velocity(State& state, Q16_16 tip_mm, std::uint32_t& faults) noexcept
     return velocity;
 }
 
+/// The model evidence's step: evidence is taken while the hand moves along a training run
+/// trained in its direction of motion (model_evidence.hpp).
+ModelEvidence::Outputs weigh_model(State& state,
+                                   const ReducedStepReport<Q16_16, kStationCapacity>& report,
+                                   std::uint32_t faults) noexcept {
+    const ReducedState<Q16_16, kStationCapacity>& model = state.model;
+    const ReducedSegment<Q16_16>& run = state.config.tables->header().segments[model.segment];
+    const Q16_16 moved_mm = state.insertion_mm - state.evidence_depth_mm;
+    state.evidence_depth_mm = state.insertion_mm;
+    const int motion = moved_mm > Q16_16{} ? 1 : (moved_mm < Q16_16{} ? -1 : 0);
+    ModelEvidence::Inputs in{};
+    in.handle_force_N = state.handle_force_N;
+    in.training_force_N = model.training_handle_force_N;
+    in.inside_model = !report.depth_clamped;
+    in.on_trained_motion = model.hold_steps == 0U && run.kind == kSegmentTravel && motion != 0 &&
+                           run.direction == motion;
+    in.force_fresh = (faults & kFaultForceStale) == 0U;
+    return ModelEvidence::step(state.config.model_evidence, in, state.model_evidence);
+}
+
 }  // namespace
 
 void init(const Config& config, State& state) noexcept {
@@ -185,15 +206,25 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     observer_inputs.handle_force_N = state.handle_force_N;
     observer_inputs.force_fresh = (faults & kFaultForceStale) == 0U;
     observer_inputs.period_s = config.period_s;
-    const TipObserver::Outputs observed =
+    TipObserver::Outputs observed =
         TipObserver::step(config.tip_observer, observer_inputs, state.tip_observer);
+    const ModelEvidence::Outputs evidence = weigh_model(state, report, faults);
+    const ReducedState<Q16_16, kStationCapacity>& model = state.model;
+    if (evidence.trusted) {
+        // The handle says this is the training patient: the model's tip, and the observer's dead
+        // reckoning continues from it when the evidence turns.
+        observed.tip_mm = TipObserver::reseed(config.tip_observer, state.insertion_mm,
+                                              model.tip_path_mm, state.tip_observer);
+        observed.uncertainty_mm = config.model_evidence.trusted_tip_sd_mm;
+    }
 
     // 4. Outputs.
-    const ReducedState<Q16_16, kStationCapacity>& model = state.model;
     outputs.tip_path_mm = observed.tip_mm;
     outputs.tip_uncertainty_mm = observed.uncertainty_mm;
     outputs.tip_velocity_mm_per_s = tip_velocity(state, observed.tip_mm, faults);
     outputs.model_tip_path_mm = model.tip_path_mm;
+    outputs.model_log_likelihood_ratio = evidence.log_ratio;
+    outputs.tip_from_model = evidence.trusted;
     // The stations stand behind the published tip as they stand behind the model's on the scope.
     const Q16_16 tip_correction_mm = observed.tip_mm - model.tip_path_mm;
     outputs.active_stations = static_cast<std::uint8_t>(model.active_stations);

@@ -12,8 +12,11 @@
 //   2. The reduced-order model (reduced_kinetics.hpp) at the validated depth: the Gauss-Seidel
 //      contact solve of the stations in Q16.16, a fixed number of sweeps and local iterations.
 //   3. The tip observer (tip_observer.hpp): the tip along the colon from the handle's evidence
-//      (depth and push force), with its uncertainty, at every depth.
-//   4. Outputs: the observer's tip, its uncertainty and its velocity (mean over the last
+//      (depth and push force), with its uncertainty, at every depth. The model evidence
+//      (model_evidence.hpp): whether the handle force agrees with what the model's training run
+//      needed; while it does, the model's tip is published and the observer continues from it.
+//   4. Outputs: the published tip (the model's while trusted, else the observer's), its
+//      uncertainty and its velocity (mean over the last
 //      kVelocityWindow steps, so it lags by half that window); the reduced model's own tip
 //      (model_tip_path_mm); each station's forces and stick / slip state, placed behind the
 //      published tip as on the scope; the largest contact force and where it acts.
@@ -40,6 +43,7 @@
 
 #include "contact/gauss_seidel_contact.hpp"
 #include "kinetics/kinetics_io.hpp"
+#include "kinetics/model_evidence.hpp"
 #include "kinetics/reduced_kinetics.hpp"
 #include "kinetics/reduced_tables.hpp"
 #include "kinetics/tip_observer.hpp"
@@ -86,6 +90,7 @@ struct Config {
     monitors::SelfLockMonitor::Config self_lock{kSelfLockConfig};
     monitors::ContactForceMonitor::Config contact_force{};
     TipObserver::Config tip_observer{};
+    ModelEvidence::Config model_evidence{};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
@@ -97,6 +102,7 @@ enum class ConfigFault : std::uint8_t {
     tables,            ///< the reduced model's tables failed check_reduced_tables
     monitors,          ///< a monitor refused its Config
     tip_observer,      ///< the tip observer refused its Config
+    model_evidence,    ///< the model evidence refused its Config
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
@@ -119,6 +125,8 @@ struct State {
     monitors::SelfLockMonitor self_lock{};
     monitors::ContactForceMonitor contact_force{};
     TipObserver::State tip_observer{};
+    ModelEvidence::State model_evidence{};
+    Q16_16 evidence_depth_mm{};  ///< the depth of the last step, for the evidence's direction
 };
 
 void init(const Config& config, State& state) noexcept;

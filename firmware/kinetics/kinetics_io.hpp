@@ -99,11 +99,16 @@ enum class ContactForceLevel : std::uint8_t {
 
 struct Outputs {
     std::uint32_t step_index{0};
-    Q16_16 tip_path_mm{};         ///< tip position along the colon centerline (the tip observer's)
-    Q16_16 tip_uncertainty_mm{};  ///< one standard deviation of tip_path_mm
+    /// Tip position along the colon centerline: the reduced model's while the handle's evidence
+    /// trusts it (tip_from_model), else the tip observer's.
+    Q16_16 tip_path_mm{};
+    Q16_16 tip_uncertainty_mm{};     ///< one standard deviation of tip_path_mm
     Q16_16 tip_velocity_mm_per_s{};  ///< d/dt of tip_path_mm
     Q16_16 model_tip_path_mm{};      ///< the reduced model's tip (what the monitors read)
-    Q16_16 advance_efficiency{};     ///< tip advance / handle advance over the window (0..1+)
+    /// The handle's evidence that this patient is the model's training patient (model_evidence.hpp)
+    Q16_16 model_log_likelihood_ratio{};
+    bool tip_from_model{false};   ///< the published tip is the model's (the evidence trusts it)
+    Q16_16 advance_efficiency{};  ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};
     std::uint8_t active_stations{0};  ///< stations inside the colon this step
     Q16_16 max_contact_force_N{};     ///< largest |f| over stations

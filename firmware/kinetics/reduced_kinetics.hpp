@@ -14,6 +14,9 @@
 //     [mm, >= 0], the resultant wall force over the stretch of scope it stands for,
 //     f_ref = (f_n, f_t, f_s) [N] in its frame, and the sign of the stretch's slip to the next
 //     knot (+1, -1, 0 = stuck);
+//   * the handle force the run needed at the knot [N, + pushing in] and the training tip's
+//     position (body frame), so that the model predicts what the box measures
+//     (model_evidence.hpp weighs the model by that prediction);
 //   * every `compliance_every` knots, each station's compliance [mm/N] (see "Compliance").
 // Training runs (segments), and which one a step uses:
 //   * travel runs, keyed by depth [mm]: segment 0 advances over the model's whole depth range
@@ -107,10 +110,18 @@ enum ReducedStationValue : std::size_t {
     kStationValueCount = 6,
 };
 
-/// Size of one knot record: K station records, then the training tip's position (x, y, z) [mm,
-/// body frame].
+/// Values after the K station records of a knot record, in this order.
+enum ReducedKnotValue : std::size_t {
+    kKnotTipX = 0,  ///< the training tip's position, body frame [mm]
+    kKnotTipY = 1,
+    kKnotTipZ = 2,
+    kKnotHandleForce = 3,  ///< the handle force the training run needed at the knot [N]
+    kKnotValueCount = 4,
+};
+
+/// Size of one knot record: K station records, then the kKnotValueCount values above.
 constexpr std::size_t reduced_knot_size(std::size_t stations) noexcept {
-    return stations * kStationValueCount + 3U;
+    return stations * kStationValueCount + kKnotValueCount;
 }
 
 /// Values per station per compliance record [mm/N]: the normal compliance and the tangential
@@ -192,6 +203,7 @@ struct ReducedState {
     std::uint32_t hold_steps{0};  ///< consecutive steps the depth has been held still (capped)
     Scalar tip_path_mm{};
     std::array<Scalar, 3> tip_position_mm{};  ///< training tip position at the depth (body frame)
+    Scalar training_handle_force_N{};         ///< the handle force the training run needed here [N]
     bool started{false};
 };
 
@@ -381,11 +393,15 @@ ReducedStepReport<Scalar, Stations> reduced_step(
                              tables.value(next, base + kStationForceN + c), weight);
         }
     }
-    const std::size_t tip_base = k_stations * kStationValueCount;
+    const std::size_t knot_base = k_stations * kStationValueCount;
     for (std::size_t c = 0; c < 3U; ++c) {
-        state.tip_position_mm[c] = detail::lerp(tables.value(knot, tip_base + c),
-                                                tables.value(next, tip_base + c), weight);
+        state.tip_position_mm[c] =
+            detail::lerp(tables.value(knot, knot_base + kKnotTipX + c),
+                         tables.value(next, knot_base + kKnotTipX + c), weight);
     }
+    state.training_handle_force_N =
+        detail::lerp(tables.value(knot, knot_base + kKnotHandleForce),
+                     tables.value(next, knot_base + kKnotHandleForce), weight);
     auto& problem = state.problem;
     problem.contact_count = active;
     problem.block_diagonal = true;              // the off-diagonal blocks are never read

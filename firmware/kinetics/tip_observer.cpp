@@ -18,6 +18,13 @@ Q16_16 push_gate(Q16_16 push_N, Q16_16 free_N, Q16_16 blocked_N) noexcept {
     return std::clamp((blocked_N - push_N) / (blocked_N - free_N), Q16_16{}, kOne);
 }
 
+/// Inside the colon, within max_ahead_mm ahead of and max_slack_mm behind the depth.
+Q16_16 within_bounds(const TipObserver::Config& config, Q16_16 depth_mm, Q16_16 tip_mm) noexcept {
+    const Q16_16 lowest = std::max(Q16_16{}, depth_mm - config.max_slack_mm);
+    const Q16_16 highest = std::max(lowest, depth_mm + config.max_ahead_mm);
+    return std::clamp(tip_mm, lowest, highest);
+}
+
 }  // namespace
 
 bool TipObserver::Config::valid() const noexcept {
@@ -26,6 +33,14 @@ bool TipObserver::Config::valid() const noexcept {
            !(eta_withdrawal < zero) && !(eta_withdrawal > kOne) && !(forget_per_s < zero) &&
            !(max_ahead_mm < zero) && !(max_slack_mm < zero) && !(sigma_floor_mm < zero) &&
            !(sigma_per_depth_mm_per_m < zero) && !(sigma_per_slack < zero);
+}
+
+Q16_16 TipObserver::reseed(const Config& config, Q16_16 depth_mm, Q16_16 tip_mm,
+                           State& state) noexcept {
+    state.started = true;
+    state.tip_mm = within_bounds(config, depth_mm, tip_mm);
+    state.depth_mm = depth_mm;
+    return state.tip_mm;
 }
 
 TipObserver::Outputs TipObserver::step(const Config& config, const Inputs& inputs,
@@ -48,10 +63,7 @@ TipObserver::Outputs TipObserver::step(const Config& config, const Inputs& input
     Q16_16 tip = state.tip_mm + eta * moved_mm;
     const Q16_16 forget = std::min(config.forget_per_s * inputs.period_s, kOne);
     tip = tip + forget * (inputs.depth_mm - tip);
-    // Bounds: inside the colon, within max_ahead_mm ahead of and max_slack_mm behind the depth.
-    const Q16_16 lowest = std::max(Q16_16{}, inputs.depth_mm - config.max_slack_mm);
-    const Q16_16 highest = std::max(lowest, inputs.depth_mm + config.max_ahead_mm);
-    state.tip_mm = std::clamp(tip, lowest, highest);
+    state.tip_mm = within_bounds(config, inputs.depth_mm, tip);
 
     out.tip_mm = state.tip_mm;
     out.slack_mm = inputs.depth_mm - state.tip_mm;

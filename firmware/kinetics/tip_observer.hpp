@@ -11,7 +11,9 @@
 // of virtual patients (host_sim/evaluate/README.md) its tip error, median / 90th percentile of the
 // cases' RMS, is 186 / 485 mm; taking the insertion depth itself as the tip gives 99 / 134 mm.
 // What carries over between patients is what the handle feels, not one colon's shape. The model
-// stays in the box for the contact forces and the monitors; the published tip is this observer's.
+// stays in the box for the contact forces and the monitors; the published tip is this observer's
+// except while the handle force agrees with the model's training run (model_evidence.hpp), when
+// it is the model's and the observer is reseeded from it (reseed).
 //
 // The physics: a dead-reckoning observer of the slack, gated by the handle force
 // -------------------------------------------------------------------------------
@@ -99,6 +101,10 @@ struct TipObserver {
 
     [[nodiscard]] static Outputs step(const Config& config, const Inputs& inputs,
                                       State& state) noexcept;
+    /// Puts the tip at `tip_mm` (a better estimate, e.g. the trusted model's) within the bounds
+    /// at `depth_mm`; the next step dead-reckons from it. Returns the tip it set.
+    static Q16_16 reseed(const Config& config, Q16_16 depth_mm, Q16_16 tip_mm,
+                         State& state) noexcept;
 };
 
 }  // namespace scopekin::kinetics

@@ -7,8 +7,9 @@
 namespace scopekin::evaluate {
 namespace {
 
-/// (a) The box as it is: firmware.csv's published outputs — the tip observer's tip and its
-/// uncertainty; the largest contact force, the alarms and the faults from the reduced model.
+/// (a) The box as it is: firmware.csv's published outputs — its tip (the reduced model's while
+/// the handle's evidence trusts it, else the tip observer's) and its uncertainty; the largest
+/// contact force, the alarms and the faults from the reduced model.
 EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     EstimatorOutput o;
     o.tip_path_mm = run.box_tip_path_mm;
@@ -57,7 +58,10 @@ EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
 
 const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
-        {"box", "the box (tip observer; forces and alarms from the reduced model)", box},
+        {"box",
+         "the box (tip observer, the model's tip where the handle agrees with it; forces and "
+         "alarms from the reduced model)",
+         box},
         {"depth_replay", "depth replay (the reduced model's tip; forces and alarms as the box's)",
          depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},

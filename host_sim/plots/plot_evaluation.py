@@ -26,6 +26,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plot_run import DPI, OI, InputError, OutputError, plt, save  # noqa: E402
@@ -101,7 +102,8 @@ def plot_distributions(directory, scorecard, path):
         for i, (name, label) in enumerate(estimators):
             vs = [v for v in values.get((key, name), []) if math.isfinite(v)]
             data.append(vs)
-            labels.append(label.replace(" (", "\n("))
+            # The full label is the scorecard's; a tick gets its head, wrapped to the column.
+            labels.append(textwrap.fill(label.split(" (")[0], 14))
             colours.append(COLOURS[i % len(COLOURS)])
         positions = list(range(1, len(data) + 1))
         drawn = [(p, d, c) for p, d, c in zip(positions, data, colours) if d]

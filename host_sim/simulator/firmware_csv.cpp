@@ -30,7 +30,9 @@ std::string firmware_csv_header() {
         h += "," + s + "arc_mm," + s + "path_mm," + s + "normal_N," + s + "tangential_N," + s +
              "state";
     }
-    return h + ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm";
+    return h +
+           ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
+           "model_log_likelihood_ratio,tip_from_model";
 }
 
 std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
@@ -62,6 +64,8 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
     put_u(line, tracker_faults);
     put_q(line, o.tip_uncertainty_mm);
     put_q(line, o.model_tip_path_mm);
+    put_q(line, o.model_log_likelihood_ratio);
+    put_u(line, o.tip_from_model ? 1U : 0U);
     return line;
 }
 

@@ -178,8 +178,11 @@ Probe probe_knot(World& world, const std::vector<std::size_t>& nodes_increasing,
             out.knot[base + kinetics::kStationForceN + c] = forces[j](static_cast<Eigen::Index>(c));
     }
     const Eigen::Vector3d tip = world.node_position_mm(world.scope_node_count() - 1);
+    const std::size_t knot_base = k * kinetics::kStationValueCount;
     for (std::size_t c = 0; c < 3; ++c)
-        out.knot[k * kinetics::kStationValueCount + c] = tip(static_cast<Eigen::Index>(c));
+        out.knot[knot_base + kinetics::kKnotTipX + c] = tip(static_cast<Eigen::Index>(c));
+    // What the box's force cell reads at this knot (the force the position-controlled hand needs).
+    out.knot[knot_base + kinetics::kKnotHandleForce] = world.handle_force_N();
     // Compliance (reduced_kinetics.hpp, "Compliance"): each station's compliance with the other
     // stations held — the inverse of its diagonal block of the stations' stiffness W^-1 (static
     // condensation onto one station) — then split: the normal compliance, and the tangential

@@ -66,8 +66,9 @@ bool same(const protocol::ContactSummary& a, const protocol::ContactSummary& b) 
 }
 bool same(const protocol::Alarms& a, const protocol::Alarms& b) {
     return a.self_lock == b.self_lock && a.contact_force_level == b.contact_force_level &&
-           a.valid == b.valid && a.self_lock_raised == b.self_lock_raised &&
-           a.critical_raised == b.critical_raised && a.step_counter == b.step_counter;
+           a.valid == b.valid && a.tip_from_model == b.tip_from_model &&
+           a.self_lock_raised == b.self_lock_raised && a.critical_raised == b.critical_raised &&
+           a.step_counter == b.step_counter;
 }
 bool same(const protocol::BoxCounter& a, const protocol::BoxCounter& b) {
     return a.index == b.index && a.value == b.value;

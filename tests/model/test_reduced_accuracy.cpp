@@ -74,7 +74,7 @@ struct Rms {
 struct ReferenceRun {
     Rms tip_fixed_vs_full, force_fixed_vs_full, normal_fixed_vs_full;
     Rms tip_fixed_vs_double, force_fixed_vs_double;
-    Rms published_tip_vs_full;    ///< the tip observer's (the published tip): reported, see below
+    Rms published_tip_vs_full;    ///< the published tip (the model's while the evidence trusts it)
     std::vector<Sample> samples;  // every step
     std::vector<double> alarm_rises_s;
     double period_s = 0.005;
@@ -137,8 +137,8 @@ const ReferenceRun& run(const std::string& name) {
 
         if (out.self_lock_alarm && !alarm) r.alarm_rises_s.push_back(world->time_s());
         alarm = out.self_lock_alarm;
-        // The reduced model's own tip (the published tip is the tip observer's, which does not
-        // use the model: kinetics.hpp).
+        // The reduced model's own tip (the published tip is the model's only while the handle's
+        // evidence trusts it, else the tip observer's: kinetics.hpp).
         r.tip_fixed_vs_double.add(real(out.model_tip_path_mm) - reduced_double.tip_path_mm);
         for (std::size_t j = 0; j < out.active_stations; ++j) {
             const auto& fd = reduced_double.force_N[j];
@@ -215,6 +215,10 @@ TEST_P(ReducedAccuracy, AgainstTheReducedModelInDoubleAndTheFullOrderModel) {
     EXPECT_LE(r.tip_fixed_vs_full.value(), 3.0) << "tip RMS [mm] vs the full-order model";
     EXPECT_LE(r.force_fixed_vs_full.value(), 0.2)
         << "station force RMS [N] vs the full-order model";
+    // The published tip: on its training patient the handle force is the training's, the model
+    // evidence trusts the model, and the box publishes the model's tip (model_evidence.hpp;
+    // bound 1 mm RMS, the estimator issue's for training-like cases).
+    EXPECT_LE(r.published_tip_vs_full.value(), 1.0) << "published tip RMS [mm] vs full-order";
 }
 
 // Generalisation: a procedure the tables were not trained on (25 mm/s instead of 20 mm/s). Not
@@ -226,6 +230,7 @@ TEST(ReducedAccuracyHeldOut, FasterAdvanceThanTrained) {
     EXPECT_LE(r.tip_fixed_vs_full.value(), 3.5) << "tip RMS [mm] vs the full-order model";
     EXPECT_LE(r.force_fixed_vs_full.value(), 0.5)
         << "station force RMS [N] vs the full-order model";
+    EXPECT_LE(r.published_tip_vs_full.value(), 1.0) << "published tip RMS [mm] vs full-order";
 }
 
 // Section 3: no self-lock alarm where no loop forms, and where one forms an alarm comes at most

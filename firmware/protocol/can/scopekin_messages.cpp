@@ -68,10 +68,12 @@ namespace alarms {
 constexpr CanSignal kSelfLock{"SelfLockAlarm", 0, 1, false, 1, 1};
 constexpr CanSignal kLevel{"ContactForceLevel", 1, 2, false, 1, 1};
 constexpr CanSignal kValid{"AlarmsValid", 3, 1, false, 1, 1};
+constexpr CanSignal kTipFromModel{"TipFromModel", 4, 1, false, 1, 1};
 constexpr CanSignal kSelfLockRaised{"SelfLockRaised", 8, 8, false, 1, 1};
 constexpr CanSignal kCriticalRaised{"CriticalRaised", 16, 8, false, 1, 1};
 constexpr CanSignal kStep{"StepCounter", 24, 8, false, 1, 1};
-constexpr std::array kSignals{kSelfLock, kLevel, kValid, kSelfLockRaised, kCriticalRaised, kStep};
+constexpr std::array kSignals{kSelfLock,       kLevel,          kValid, kTipFromModel,
+                              kSelfLockRaised, kCriticalRaised, kStep};
 constexpr std::uint8_t kLength = 4;
 }  // namespace alarms
 
@@ -340,6 +342,7 @@ hal::CanFrame encode(const Alarms& message) {
     put_integer(frame, kSelfLock, message.self_lock ? 1 : 0);
     put_integer(frame, kLevel, message.contact_force_level);
     put_integer(frame, kValid, message.valid ? 1 : 0);
+    put_integer(frame, kTipFromModel, message.tip_from_model ? 1 : 0);
     put_integer(frame, kSelfLockRaised, message.self_lock_raised);
     put_integer(frame, kCriticalRaised, message.critical_raised);
     put_integer(frame, kStep, message.step_counter);
@@ -360,6 +363,7 @@ DecodeResult decode(const hal::CanFrame& frame, Alarms& message) {
     decoded.self_lock = get_flag(frame, kSelfLock);
     decoded.contact_force_level = level;
     decoded.valid = get_flag(frame, kValid);
+    decoded.tip_from_model = get_flag(frame, kTipFromModel);
     decoded.self_lock_raised = get_unsigned<std::uint8_t>(frame, kSelfLockRaised);
     decoded.critical_raised = get_unsigned<std::uint8_t>(frame, kCriticalRaised);
     decoded.step_counter = get_unsigned<std::uint8_t>(frame, kStep);

@@ -108,6 +108,7 @@ struct Alarms {
     bool self_lock{false};
     std::uint8_t contact_force_level{0};  ///< 0 normal, 1 warning, 2 critical
     bool valid{false};
+    bool tip_from_model{false};        ///< KineticEstimate's tip is the reduced model's (1.2)
     std::uint8_t self_lock_raised{0};  ///< wraps
     std::uint8_t critical_raised{0};   ///< wraps
     std::uint8_t step_counter{0};

@@ -103,6 +103,7 @@ void bind(Visitor& v, Alarms& m) {
     v.flag("SelfLockAlarm", m.self_lock);
     v.integer("ContactForceLevel", m.contact_force_level);
     v.flag("AlarmsValid", m.valid);
+    v.flag("TipFromModel", m.tip_from_model);
     v.integer("SelfLockRaised", m.self_lock_raised);
     v.integer("CriticalRaised", m.critical_raised);
     v.integer("StepCounter", m.step_counter);

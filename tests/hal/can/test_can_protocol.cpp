@@ -98,6 +98,13 @@ SCOPEKIN_TEST(CanProtocol, AlarmsBytesByHand) {
     const CanFrame frame = protocol::encode(message);
     SCOPEKIN_EXPECT_EQ(frame.id, 0x183U);
     SCOPEKIN_EXPECT_TRUE(bytes_are(frame, {0x0D, 0x03, 0x01, 0x07}));
+    // TipFromModel 1 (bit 4, added in 1.2): byte 0 = 0x1D; a 1.1 reader ignores the bit.
+    message.tip_from_model = true;
+    SCOPEKIN_EXPECT_TRUE(bytes_are(protocol::encode(message), {0x1D, 0x03, 0x01, 0x07}));
+    protocol::Alarms decoded{};
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(protocol::encode(message), decoded) ==
+                         protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_TRUE(decoded.tip_from_model);
 }
 
 SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {

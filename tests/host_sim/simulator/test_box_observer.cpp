@@ -32,6 +32,19 @@ std::string last_cells(const std::string& line, int n) {
     return line.substr(pos + 1);
 }
 
+/// The cell of `line` in the column that `header` names `name` ("" when there is none).
+std::string cell(const std::string& header, const std::string& line, const std::string& name) {
+    std::vector<std::string> names, cells;
+    for (auto [text, out] : {std::pair{&header, &names}, std::pair{&line, &cells}}) {
+        std::stringstream in(*text);
+        for (std::string c; std::getline(in, c, ',');)
+            out->push_back(c);
+    }
+    for (std::size_t i = 0; i < names.size() && i < cells.size(); ++i)
+        if (names[i] == name) return cells[i];
+    return {};
+}
+
 TEST(BoxObserver, BoxFaultBitsAreCountedWithTheirFirstTime) {
     // Six periods; counter_gap (bit 6) in the 2nd to 4th, receive_backlog (bit 14) in the 3rd.
     std::ostringstream csv;
@@ -56,13 +69,14 @@ TEST(BoxObserver, BoxFaultBitsAreCountedWithTheirFirstTime) {
 
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), 7U);
-    // box_faults, tracker_faults, then the two columns added after them (zero outputs here).
-    EXPECT_EQ(last_cells(lines[0], 4),
-              "box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm");
-    EXPECT_EQ(last_cells(lines[1], 4), "0,0,0.00000,0.00000");
-    EXPECT_EQ(last_cells(lines[2], 4), "64,0,0.00000,0.00000");
-    EXPECT_EQ(last_cells(lines[3], 4), "16448,0,0.00000,0.00000");  // 64 + 16384
-    EXPECT_EQ(last_cells(lines[6], 4), "0,0,0.00000,0.00000");
+    // box_faults, tracker_faults, then the four columns added after them (zero outputs here).
+    EXPECT_EQ(last_cells(lines[0], 6),
+              "box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
+              "model_log_likelihood_ratio,tip_from_model");
+    EXPECT_EQ(last_cells(lines[1], 6), "0,0,0.00000,0.00000,0.00000,0");
+    EXPECT_EQ(last_cells(lines[2], 6), "64,0,0.00000,0.00000,0.00000,0");
+    EXPECT_EQ(last_cells(lines[3], 6), "16448,0,0.00000,0.00000,0.00000,0");  // 64 + 16384
+    EXPECT_EQ(last_cells(lines[6], 6), "0,0,0.00000,0.00000,0.00000,0");
 }
 
 TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {
@@ -98,9 +112,8 @@ TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), tracker.size() + 1);
     for (std::size_t k = 0; k < tracker.size(); ++k)
-        EXPECT_EQ(last_cells(lines[k + 1], 3).substr(0, last_cells(lines[k + 1], 3).find(',')),
-                  std::to_string(tracker[k]))
-            << "period " << k << " (tracker_faults: the third column from the end)";
+        EXPECT_EQ(cell(lines[0], lines[k + 1], "tracker_faults"), std::to_string(tracker[k]))
+            << "period " << k;
 }
 
 }  // namespace
