@@ -19,17 +19,19 @@
 //     (model_evidence.hpp weighs the model by that prediction);
 //   * every `compliance_every` knots, each station's compliance [mm/N] (see "Compliance").
 // Training runs (segments), and which one a step uses:
-//   * travel runs, keyed by depth [mm]: segment 0 advances over the model's whole depth range
-//     (default: 20 -> 760 mm at 20 mm/s, a knot every 1 mm); others advance or withdraw over
-//     part of it (default: the withdrawal 680 -> 560 mm that straightens the sigmoid loop, a
-//     knot every 0.75 mm);
+//   * travel runs, keyed by depth [mm]: segment 0 advances from the shallowest depth (default:
+//     20 -> 760 mm at 20 mm/s, a knot every 1 mm); others advance or withdraw over other depths
+//     (default: the withdrawal 680 -> 560 mm that straightens the sigmoid loop, a knot every
+//     0.75 mm; the re-advance after it, 760 -> 1680 mm, a knot every 2 mm);
 //   * hold runs, keyed by the time the hand has held the depth still [s] (default: 2.5 s at
 //     680 mm, in which the loaded scope relaxes and is rolled 90°, a knot every 0.05 s).
 // The step latches the hand's DIRECTION (reversed once the depth has gone back 0.5 mm from its
 // extreme since the last turn; the first move after a hold sets it at once) and counts the HOLD
 // time (consecutive steps that move the depth by <= 0.01 mm; a hold counts from 4 such steps).
-// While held within 0.5 mm of a hold run's depth it uses that run; otherwise the travel run in its direction whose depths hold the
-// depth; otherwise segment 0. Moving to another run starts every station on that run's state.
+// While held within 0.5 mm of a hold run's depth it uses that run; otherwise the last travel run
+// in its direction whose depths hold the depth; otherwise the last travel run in the other
+// direction that holds it (withdrawing beyond the withdrawal runs: an advance run, backwards);
+// otherwise segment 0. Moving to another run starts every station on that run's state.
 // Station friction: a station's force is the resultant over a curved stretch of scope whose
 // nodes each slide with |f_T| = mu f_n on their own wall normal, so the resultant's |f_T| / f_n
 // is not mu — below it on a straight stretch, above it where the normals spread around a bend.
@@ -322,13 +324,15 @@ ReducedStepReport<Scalar, Stations> reduced_step(
     state.last_depth_mm = depth_mm;
 
     // Training run: while held, a hold run at this depth; else the last travel run in this
-    // direction whose depths hold the depth; else segment 0 (trained advancing over the model's
-    // whole depth range).
+    // direction whose depths hold the depth; else the last travel run in the other direction
+    // whose depths hold it (travelled backwards); else segment 0 (trained advancing from the
+    // shallowest depth; the depth is clamped to it).
     std::size_t segment_index = 0;
     const std::size_t segment_count =
         head.segment_count <= kMaxReducedSegments ? head.segment_count : kMaxReducedSegments;
     bool holding = false;
-    for (std::size_t i = 1; i < segment_count; ++i) {  // bound: kMaxReducedSegments
+    bool same_direction = false;
+    for (std::size_t i = 0; i < segment_count; ++i) {  // bound: kMaxReducedSegments
         const ReducedSegment<Scalar>& candidate = head.segments[i];
         if (candidate.kind == kSegmentHold) {
             if (state.hold_steps >= kMinHoldSteps &&
@@ -336,10 +340,13 @@ ReducedStepReport<Scalar, Stations> reduced_step(
                 segment_index = i;
                 holding = true;
             }
-        } else if (!holding && candidate.direction == state.direction &&
-                   !(depth_mm < candidate.key_start) &&
+        } else if (!holding && !(depth_mm < candidate.key_start) &&
                    !(depth_mm > detail::segment_end_mm(candidate))) {
-            segment_index = i;
+            const bool same = candidate.direction == state.direction;
+            if (same || !same_direction) {
+                segment_index = i;
+                same_direction = same;
+            }
         }
     }
     const ReducedSegment<Scalar>& segment = head.segments[segment_index];

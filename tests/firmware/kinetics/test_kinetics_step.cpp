@@ -160,9 +160,11 @@ SCOPEKIN_TEST(KineticsStep, OutOfRangeInputsAreSaturatedAndFlagged) {
 // advances, 1 is the hold at 680 mm, 2 the withdrawal 680 -> 560 mm (model/reduction/training.json).
 SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
     const kin::ReducedModelHeader<Q16_16>& head = kin::default_reduced_tables().header();
-    SCOPEKIN_EXPECT_EQ(head.segment_count, std::size_t{3});
+    SCOPEKIN_EXPECT_EQ(head.segment_count, std::size_t{4});
     SCOPEKIN_EXPECT_EQ(head.segments[1].kind, static_cast<int>(kin::kSegmentHold));
     SCOPEKIN_EXPECT_EQ(head.segments[2].direction, -1);
+    SCOPEKIN_EXPECT_EQ(head.segments[3].direction, 1);
+    SCOPEKIN_EXPECT_EQ(head.segments[3].key_start.raw(), Q16_16::from_int(760).raw());
     advance_to(680);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
     for (int i = 0; i < 100; ++i)
@@ -183,6 +185,26 @@ SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
     SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
+}
+
+SCOPEKIN_TEST(KineticsStep, BeyondTheFirstAdvanceTheReAdvanceRunCoversTheDepthBothWays) {
+    // Advancing past 760 mm: the re-advance run (segment 3, 760..1680 mm), inside the model.
+    advance_to(760);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{3});  // the last run holding 760 mm
+    for (int d = 761; d <= 1200; ++d)
+        kin::step(sample(d), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{3});
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags & kin::kFaultDepthOutsideModel, std::uint32_t{0});
+    // Withdrawing there: no withdrawal run holds the depth, so the advance run, backwards.
+    for (int d = 1199; d >= 1000; --d)
+        kin::step(sample(d), g_state, g_out);
+    SCOPEKIN_EXPECT_EQ(g_state.model.direction, -1);
+    SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{3});
+    SCOPEKIN_EXPECT_EQ(g_out.fault_flags & kin::kFaultDepthOutsideModel, std::uint32_t{0});
+    // Past its last knot the depth is clamped and flagged.
+    for (int d = 1000; d <= 1700; d += 2)
+        kin::step(sample(d), g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE((g_out.fault_flags & kin::kFaultDepthOutsideModel) != 0U);
 }
 
 SCOPEKIN_TEST(KineticsStep, DepthJitterBelowTheHysteresisDoesNotReverseTheDirection) {
