@@ -81,11 +81,11 @@ def check_demo():
     expect(s["procedure"]["cecum_reached"] and s["procedure"]["insertion_at_cecum_mm"] < 1600.0,
            f"the cecum reached with less than 1,600 mm inserted: {s['procedure']}")
     expect(s["peak_handle_force_N"]["true"] < 43.0, "peak handle force below the 43 N peak push measured in patients (firmware/fixed_point/RANGES.md [A])")
-    # Past the reduced model's depth range (760 mm) the box holds its estimate and says so.
+    # The reduced model covers the whole run (its tables hold this job's re-advance to 1680 mm:
+    # model/reduction/training.json), so the box never leaves it; the faults it did see are printed.
     first = s["firmware"]["fault_first_s"]
-    expect("depth_outside_model" in first and 60.0 < first["depth_outside_model"] < 65.0,
-           f"depth_outside_model flagged from ~62.7 s (20 + 25 * (t - 50.5) - 225 > 760): {first}")
-    expect("fault flag depth_outside_model" in p.stdout, "the demo prints the fault flags it saw")
+    expect("depth_outside_model" not in first, f"the whole run inside the reduced model: {first}")
+    expect("fault flag contact_residual" in p.stdout, "the demo prints the fault flags it saw")
     world = rows(os.path.join(out, "world.csv"))
     firmware = rows(os.path.join(out, "firmware.csv"))
     # 99 s at 30 Hz: 2971 rows (one at t = 0); the box every 5 ms: 19800 periods.
