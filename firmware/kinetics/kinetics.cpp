@@ -127,14 +127,14 @@ Q16_16 tip_velocity(State& state, Q16_16 tip_mm, std::uint32_t& faults) noexcept
 }
 
 /// The model evidence's step: evidence is taken while the hand moves along a training run
-/// trained in its direction of motion (model_evidence.hpp).
+/// trained in its direction of motion (model_evidence.hpp); `previous_depth_mm` is the depth of
+/// the model's last step.
 ModelEvidence::Outputs weigh_model(State& state,
                                    const ReducedStepReport<Q16_16, kStationCapacity>& report,
-                                   std::uint32_t faults) noexcept {
+                                   Q16_16 previous_depth_mm, std::uint32_t faults) noexcept {
     const ReducedState<Q16_16, kStationCapacity>& model = state.model;
     const ReducedSegment<Q16_16>& run = state.config.tables->header().segments[model.segment];
-    const Q16_16 moved_mm = state.insertion_mm - state.evidence_depth_mm;
-    state.evidence_depth_mm = state.insertion_mm;
+    const Q16_16 moved_mm = state.insertion_mm - previous_depth_mm;
     const int motion = moved_mm > Q16_16{} ? 1 : (moved_mm < Q16_16{} ? -1 : 0);
     ModelEvidence::Inputs in{};
     in.handle_force_N = state.handle_force_N;
@@ -189,6 +189,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     gauss_seidel.mode = contact::SweepMode::fixed;
     gauss_seidel.max_sweeps = config.contact_sweeps;
     gauss_seidel.local_iterations = config.contact_local_iterations;
+    const Q16_16 previous_depth_mm = state.model.last_depth_mm;
     const ReducedStepReport<Q16_16, kStationCapacity> report = reduced_step(
         *config.tables, state.insertion_mm, config.period_s, state.model, gauss_seidel);
     if (report.depth_clamped) faults |= kFaultDepthOutsideModel;
@@ -208,7 +209,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     observer_inputs.period_s = config.period_s;
     TipObserver::Outputs observed =
         TipObserver::step(config.tip_observer, observer_inputs, state.tip_observer);
-    const ModelEvidence::Outputs evidence = weigh_model(state, report, faults);
+    const ModelEvidence::Outputs evidence = weigh_model(state, report, previous_depth_mm, faults);
     const ReducedState<Q16_16, kStationCapacity>& model = state.model;
     if (evidence.trusted) {
         // The handle says this is the training patient: the model's tip, and the observer's dead

@@ -126,7 +126,6 @@ struct State {
     monitors::ContactForceMonitor contact_force{};
     TipObserver::State tip_observer{};
     ModelEvidence::State model_evidence{};
-    Q16_16 evidence_depth_mm{};  ///< the depth of the last step, for the evidence's direction
 };
 
 void init(const Config& config, State& state) noexcept;
