@@ -3,6 +3,8 @@
 // reference scenarios of model/scenarios/reference_*.json, and on one held-out procedure
 // (heldout_fast_advance.json) that is not a training run.
 //
+// The double tables are the build's (generated/reduced_model_double.json, written by the same
+// generator run as the firmware's tables), so no test repeats the training runs.
 // Each scenario is run once in the full-order world (solver step 5 ms = the firmware period);
 // at every step the world's insertion depth and handle force drive
 //   * the firmware itself (kinetics::step, Q16.16, the generated default tables), and
@@ -32,6 +34,7 @@
 #include "kinetics/default_reduced_tables.hpp"
 #include "kinetics/kinetics.hpp"
 #include "model/reduction/reduced_model.hpp"
+#include "model/reduction/reduced_model_json.hpp"
 #include "model/reduction/reduced_table_writer.hpp"
 #include "model/scenario/procedure.hpp"
 #include "model/scenario/scenario.hpp"
@@ -80,10 +83,19 @@ struct ReferenceRun {
     double period_s = 0.005;
 };
 
+/// The reduced model in double from the same training runs: the build's own (it runs them once
+/// for the firmware's tables, model/reduction/reduced_model_json.hpp), or, in a build that takes
+/// the committed tables instead, run here (about a minute).
 const model::ReducedModelData& double_tables() {
-    static const model::ReducedModelData data =
-        model::build_reduced_model(model::read_reduction_spec(std::string(SCOPEKIN_SOURCE_DIR) +
-                                                              "/model/reduction/training.json"));
+    static const model::ReducedModelData data = [] {
+        const model::ReductionSettings spec = model::read_reduction_spec(
+            std::string(SCOPEKIN_SOURCE_DIR) + "/model/reduction/training.json");
+#ifdef SCOPEKIN_REDUCED_MODEL_DOUBLE
+        return model::read_reduced_model_json(SCOPEKIN_REDUCED_MODEL_DOUBLE, spec);
+#else
+        return model::build_reduced_model(spec);
+#endif
+    }();
     return data;
 }
 

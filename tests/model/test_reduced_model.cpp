@@ -4,11 +4,15 @@
 // procedure the reduced model has no deviation to add).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "model/colon/bundled_colons.hpp"
 #include "model/model_error.hpp"
 #include "model/reduction/reduced_model.hpp"
+#include "model/reduction/reduced_model_json.hpp"
 #include "model/scope/cf_q160l.hpp"
 #include "model/world/world.hpp"
 
@@ -143,6 +147,42 @@ TEST(ReducedModel, ReproducesItsTrainingRunAtTheKnots) {
     // 190 mm inserted: all four stations (0 .. 150 mm from the tip) are inside.
     EXPECT_EQ(state.active_stations, 4U);
     EXPECT_NEAR(state.tip_path_mm, 190.0, 15.0);
+}
+
+// The double data written for the accuracy tests reads back bit for bit (header and every value),
+// and a file made for another spec, a short record or a non-number is refused by name.
+TEST(ReducedModelJson, RoundTripsExactlyAndRefusesWhatDoesNotFit) {
+    const ReductionSettings s = short_settings();
+    ReducedModelData data = build_reduced_model(s);
+    data.knots[3][1] = 0.1 + 0.2;  // not a short decimal: must still read back to the same bits
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                      ("scopekin_reduced_json_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const auto write = [&](const std::string& name, const ReducedModelData& d) {
+        std::ofstream out(dir / name);
+        write_reduced_model_json(d, out);
+        return (dir / name).string();
+    };
+    const ReducedModelData back = read_reduced_model_json(write("good.json", data), s);
+    EXPECT_EQ(back.knots, data.knots);
+    EXPECT_EQ(back.compliances, data.compliances);
+    EXPECT_EQ(back.head.stations, data.head.stations);
+    EXPECT_EQ(back.head.friction, data.head.friction);
+    ASSERT_EQ(back.head.segment_count, 1U);
+    EXPECT_EQ(back.head.segments[0].knots, data.head.segments[0].knots);
+    EXPECT_EQ(back.head.segments[0].key_start, data.head.segments[0].key_start);
+    EXPECT_EQ(back.head.segments[0].key_step, data.head.segments[0].key_step);
+
+    ReductionSettings other = s;
+    other.station_spacing_mm = 40.0;
+    EXPECT_THROW((void)read_reduced_model_json(dir / "good.json", other), ModelError);
+    ReducedModelData short_record = data;
+    short_record.knots[2].pop_back();
+    EXPECT_THROW((void)read_reduced_model_json(write("short.json", short_record), s), ModelError);
+    ReducedModelData not_finite = data;
+    not_finite.compliances[1][0] = std::nan("");  // written as null
+    EXPECT_THROW((void)read_reduced_model_json(write("nan.json", not_finite), s), ModelError);
+    std::filesystem::remove_all(dir);
 }
 
 }  // namespace
