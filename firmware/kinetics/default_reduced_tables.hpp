@@ -14,10 +14,11 @@ using fixed_point::Q16_16;
 
 [[nodiscard]] const ReducedTablesQ16& default_reduced_tables() noexcept;
 
-/// Config{} with the default tables.
+/// Config{} with the default tables and the fitted slack regressor.
 [[nodiscard]] inline Config default_config() noexcept {
     Config config{};
     config.tables = &default_reduced_tables();
+    config.slack_trees = &default_slack_trees();
     return config;
 }
 

@@ -47,6 +47,8 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
     }
     if (!config.tip_observer.valid()) return ConfigFault::tip_observer;
     if (!config.model_evidence.valid()) return ConfigFault::model_evidence;
+    if (config.slack_trees != nullptr && !config.slack_trees->valid())
+        return ConfigFault::slack_regressor;
     return ConfigFault::none;
 }
 
@@ -201,7 +203,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         faults |= kFaultContactResidual;
     }
 
-    // 3. The tip observer: the published tip, from the handle's evidence.
+    // 3. The tip observer, the model evidence and the slack regressor: the published tip.
     TipObserver::Inputs observer_inputs{};
     observer_inputs.depth_mm = state.insertion_mm;
     observer_inputs.handle_force_N = state.handle_force_N;
@@ -218,6 +220,21 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
                                               model.tip_path_mm, state.tip_observer);
         observed.uncertainty_mm = config.model_evidence.trusted_tip_sd_mm;
     }
+    if (config.slack_trees != nullptr) {
+        // The regressor reads the observer's slack (after any reseed) among its features.
+        SlackRegressor::Inputs slack_inputs{};
+        slack_inputs.depth_mm = state.insertion_mm;
+        slack_inputs.handle_force_N = state.handle_force_N;
+        slack_inputs.observer_slack_mm = state.insertion_mm - state.tip_observer.tip_mm;
+        slack_inputs.period_s = config.period_s;
+        const SlackRegressor::Outputs regressed =
+            SlackRegressor::step(*config.slack_trees, slack_inputs, state.slack);
+        if (!evidence.trusted) {
+            observed.tip_mm = TipObserver::bounded(config.tip_observer, state.insertion_mm,
+                                                   state.insertion_mm - regressed.slack_mm);
+            observed.uncertainty_mm = regressed.uncertainty_mm;
+        }
+    }
 
     // 4. Outputs.
     outputs.tip_path_mm = observed.tip_mm;
@@ -226,6 +243,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     outputs.model_tip_path_mm = model.tip_path_mm;
     outputs.model_log_likelihood_ratio = evidence.log_ratio;
     outputs.tip_from_model = evidence.trusted;
+    outputs.observer_tip_path_mm = state.tip_observer.tip_mm;
     // The stations stand behind the published tip as they stand behind the model's on the scope.
     const Q16_16 tip_correction_mm = observed.tip_mm - model.tip_path_mm;
     outputs.active_stations = static_cast<std::uint8_t>(model.active_stations);

@@ -15,7 +15,10 @@
 //      (depth and push force), with its uncertainty, at every depth. The model evidence
 //      (model_evidence.hpp): whether the handle force agrees with what the model's training run
 //      needed; while it does, the model's tip is published and the observer continues from it.
-//   4. Outputs: the published tip (the model's while trusted, else the observer's), its
+//      The slack regressor (slack_regressor.hpp): depth - tip regressed on the handle's history,
+//      the observer's slack among its inputs, by trees fitted on a population of patients.
+//   4. Outputs: the published tip (the model's while trusted, else the regressor's, else the
+//      observer's when no trees are configured), its
 //      uncertainty and its velocity (mean over the last
 //      kVelocityWindow steps, so it lags by half that window); the reduced model's own tip
 //      (model_tip_path_mm); each station's forces and stick / slip state, placed behind the
@@ -46,6 +49,7 @@
 #include "kinetics/model_evidence.hpp"
 #include "kinetics/reduced_kinetics.hpp"
 #include "kinetics/reduced_tables.hpp"
+#include "kinetics/slack_regressor.hpp"
 #include "kinetics/tip_observer.hpp"
 #include "monitors/advance_efficiency.hpp"
 #include "monitors/contact_force_monitor.hpp"
@@ -91,6 +95,9 @@ struct Config {
     monitors::ContactForceMonitor::Config contact_force{};
     TipObserver::Config tip_observer{};
     ModelEvidence::Config model_evidence{};
+    /// The slack regressor's trees (slack_regressor.hpp; default_config() sets the fitted ones).
+    /// nullptr: no regressor, the observer's tip is published (as before it existed).
+    const SlackTrees* slack_trees{nullptr};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
@@ -103,6 +110,7 @@ enum class ConfigFault : std::uint8_t {
     monitors,          ///< a monitor refused its Config
     tip_observer,      ///< the tip observer refused its Config
     model_evidence,    ///< the model evidence refused its Config
+    slack_regressor,   ///< the slack regressor's trees are not valid()
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
@@ -126,6 +134,7 @@ struct State {
     monitors::ContactForceMonitor contact_force{};
     TipObserver::State tip_observer{};
     ModelEvidence::State model_evidence{};
+    SlackRegressor::State slack{};
 };
 
 void init(const Config& config, State& state) noexcept;

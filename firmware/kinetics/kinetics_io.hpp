@@ -69,7 +69,7 @@ enum FaultFlag : std::uint32_t {
     kFaultContactResidual = 1U << 9U,  ///< the contact solve left a residual above its bound
     kFaultSaturation = 1U << 10U,      ///< an internal quantity hit its fixed-point limit
     /// Depth outside the reduced model's travel run in use (default 20..1680 mm): the model (its
-    /// stations, forces and monitors) is clamped to it; the published tip (the observer) is not.
+    /// stations, forces and monitors) is clamped to it; the published tip (the regressor's) is not.
     kFaultDepthOutsideModel = 1U << 11U,
     kFaultConfig = 1U << 12U,        ///< init refused the configuration: no estimate
     kFaultMonitorInput = 1U << 13U,  ///< a monitor rejected its input (held its output)
@@ -100,15 +100,17 @@ enum class ContactForceLevel : std::uint8_t {
 struct Outputs {
     std::uint32_t step_index{0};
     /// Tip position along the colon centerline: the reduced model's while the handle's evidence
-    /// trusts it (tip_from_model), else the tip observer's.
+    /// trusts it (tip_from_model), else depth - the slack regressor's slack (slack_regressor.hpp),
+    /// or the tip observer's when no regressor is configured.
     Q16_16 tip_path_mm{};
     Q16_16 tip_uncertainty_mm{};     ///< one standard deviation of tip_path_mm
     Q16_16 tip_velocity_mm_per_s{};  ///< d/dt of tip_path_mm
     Q16_16 model_tip_path_mm{};      ///< the reduced model's tip (what the monitors read)
     /// The handle's evidence that this patient is the model's training patient (model_evidence.hpp)
     Q16_16 model_log_likelihood_ratio{};
-    bool tip_from_model{false};   ///< the published tip is the model's (the evidence trusts it)
-    Q16_16 advance_efficiency{};  ///< tip advance / handle advance over the window (0..1+)
+    bool tip_from_model{false};     ///< the published tip is the model's (the evidence trusts it)
+    Q16_16 observer_tip_path_mm{};  ///< the tip observer's own tip (an input of the regressor)
+    Q16_16 advance_efficiency{};    ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};
     std::uint8_t active_stations{0};  ///< stations inside the colon this step
     Q16_16 max_contact_force_N{};     ///< largest |f| over stations

@@ -35,6 +35,10 @@ bool TipObserver::Config::valid() const noexcept {
            !(sigma_per_depth_mm_per_m < zero) && !(sigma_per_slack < zero);
 }
 
+Q16_16 TipObserver::bounded(const Config& config, Q16_16 depth_mm, Q16_16 tip_mm) noexcept {
+    return within_bounds(config, depth_mm, tip_mm);
+}
+
 Q16_16 TipObserver::reseed(const Config& config, Q16_16 depth_mm, Q16_16 tip_mm,
                            State& state) noexcept {
     state.started = true;

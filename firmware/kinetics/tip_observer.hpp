@@ -105,6 +105,10 @@ struct TipObserver {
     /// at `depth_mm`; the next step dead-reckons from it. Returns the tip it set.
     static Q16_16 reseed(const Config& config, Q16_16 depth_mm, Q16_16 tip_mm,
                          State& state) noexcept;
+    /// `tip_mm` within the bounds at `depth_mm`: inside the colon, at most max_ahead_mm ahead of
+    /// the depth and max_slack_mm behind it.
+    [[nodiscard]] static Q16_16 bounded(const Config& config, Q16_16 depth_mm,
+                                        Q16_16 tip_mm) noexcept;
 };
 
 }  // namespace scopekin::kinetics

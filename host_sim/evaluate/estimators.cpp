@@ -59,7 +59,7 @@ EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
 const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
         {"box",
-         "the box (tip observer, the model's tip where the handle agrees with it; forces and "
+         "the box (slack regressor, the model's tip where the handle agrees with it; forces and "
          "alarms from the reduced model)",
          box},
         {"depth_replay", "depth replay (the reduced model's tip; forces and alarms as the box's)",

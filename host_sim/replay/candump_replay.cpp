@@ -168,7 +168,7 @@ ReplayResult replay_candump(const CandumpLog& log,
     auto box = std::make_unique<executive::SensorBox>();
     executive::BoxConfig config{};
     config.period_us = kBoxPeriodUs;
-    config.kinetics.tables = &kinetics::default_reduced_tables();
+    config.kinetics = kinetics::default_config();  // the default tables and trees
     (void)box->init(config, *bus, nullptr);
 
     auto run = [&](std::uint64_t time_us) {

@@ -32,7 +32,7 @@ std::string firmware_csv_header() {
     }
     return h +
            ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
-           "model_log_likelihood_ratio,tip_from_model";
+           "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm";
 }
 
 std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
@@ -66,6 +66,7 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
     put_q(line, o.model_tip_path_mm);
     put_q(line, o.model_log_likelihood_ratio);
     put_u(line, o.tip_from_model ? 1U : 0U);
+    put_q(line, o.observer_tip_path_mm);
     return line;
 }
 

@@ -15,7 +15,7 @@ FirmwareLoop::FirmwareLoop(PeriodCallback on_period, std::uint32_t period_us)
       box_(std::make_unique<executive::SensorBox>()) {
     executive::BoxConfig config{};
     config.period_us = period_us_;
-    config.kinetics.tables = &kinetics::default_reduced_tables();
+    config.kinetics = kinetics::default_config();  // the default tables and trees
     estimator_ok_ = box_->init(config, wire_->box(), serial_.get());
     feeder_ = std::make_unique<recording::DeviceFeeder>(wire_->world(), *serial_, clock_.get());
 }

@@ -98,7 +98,7 @@ constexpr std::size_t aggregate_field_count() noexcept {
 
 }  // namespace detail
 
-static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 17U,
+static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 18U,
               "kinetics::Outputs changed: hash every field in hash_outputs(), then update this "
               "count and regenerate the golden hashes (tests/firmware/data/README.md)");
 static_assert(detail::aggregate_field_count<kinetics::StationEstimate>() == 5U,
@@ -118,6 +118,7 @@ constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noe
     hash.q16(outputs.model_tip_path_mm);
     hash.q16(outputs.model_log_likelihood_ratio);
     hash.boolean(outputs.tip_from_model);
+    hash.q16(outputs.observer_tip_path_mm);
     hash.q16(outputs.advance_efficiency);
     for (const kinetics::StationEstimate& station : outputs.stations) {  // bound: kStationCapacity
         hash.q16(station.arc_from_tip_mm);

@@ -93,6 +93,7 @@ SCOPEKIN_TEST(OutputIdentity, EveryFieldOfOutputsChangesTheHash) {
         [](Outputs& o, Q16_16 v) { o.model_tip_path_mm = v; },
         [](Outputs& o, Q16_16 v) { o.model_log_likelihood_ratio = v; },
         [](Outputs& o, Q16_16) { o.tip_from_model = true; },
+        [](Outputs& o, Q16_16 v) { o.observer_tip_path_mm = v; },
         [](Outputs& o, Q16_16 v) { o.advance_efficiency = v; },
         [](Outputs& o, Q16_16) { o.active_stations = 1U; },
         [](Outputs& o, Q16_16 v) { o.max_contact_force_N = v; },

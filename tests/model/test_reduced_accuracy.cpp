@@ -150,7 +150,7 @@ const ReferenceRun& run(const std::string& name) {
         if (out.self_lock_alarm && !alarm) r.alarm_rises_s.push_back(world->time_s());
         alarm = out.self_lock_alarm;
         // The reduced model's own tip (the published tip is the model's only while the handle's
-        // evidence trusts it, else the tip observer's: kinetics.hpp).
+        // evidence trusts it, else the slack regressor's: kinetics.hpp).
         r.tip_fixed_vs_double.add(real(out.model_tip_path_mm) - reduced_double.tip_path_mm);
         for (std::size_t j = 0; j < out.active_stations; ++j) {
             const auto& fd = reduced_double.force_N[j];

@@ -53,7 +53,7 @@ void write_number(const char* label, std::uint32_t value) {
 int main() {
     scopekin::executive::BoxConfig config{};
     config.period_us = kPeriodUs;
-    config.kinetics.tables = &scopekin::kinetics::default_reduced_tables();
+    config.kinetics = scopekin::kinetics::default_config();  // the default tables and trees
     config.em_tracker.monitored_sources = 0;  // no tracker on this board: nothing can go stale
     const bool estimator_ok = g_box.init(config, g_wire.box(), &g_uart);
 

@@ -377,7 +377,7 @@ int main(int argc, char** argv) {
 
     scopekin::executive::BoxConfig config;
     config.period_us = options.period_ms * 1000U;
-    config.kinetics.tables = &scopekin::kinetics::default_reduced_tables();
+    config.kinetics = scopekin::kinetics::default_config();  // the default tables and trees
     config.handle_sensors.stale_after_us = options.stale_periods * config.period_us;
     if (!box.box.init(config, *bus, serial)) {
         std::fprintf(stderr,

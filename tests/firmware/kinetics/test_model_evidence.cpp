@@ -165,12 +165,14 @@ SCOPEKIN_TEST(ModelEvidence, AHandleForce3NAboveTheTrainingsTurnsTheTrustAfter93
     SCOPEKIN_EXPECT_TRUE(agreed - 92 * 3551 > kTrustRaw && agreed - 93 * 3551 <= kTrustRaw);
     SCOPEKIN_EXPECT_TRUE(g_out.tip_from_model);
     const Q16_16 last_model_tip = g_out.tip_path_mm;
+    SCOPEKIN_EXPECT_EQ(g_out.observer_tip_path_mm.raw(), last_model_tip.raw());  // reseeded
     step_at(d, training_force_at(d) + three);
     SCOPEKIN_EXPECT_EQ(g_out.model_log_likelihood_ratio.raw(), agreed - 93 * 3551);
     SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
     // The observer continued from the model's tip: one 1 mm step of dead reckoning (eta <= 1)
-    // and 0.025 % of forgetting away from it, not the observer's own slack.
-    const Q16_16 moved = g_out.tip_path_mm - last_model_tip;
+    // and 0.025 % of forgetting away from it, not the observer's own slack. (The published tip
+    // is now the slack regressor's, which reads the observer's slack.)
+    const Q16_16 moved = g_out.observer_tip_path_mm - last_model_tip;
     SCOPEKIN_EXPECT_TRUE(!(moved < Q16_16{}) && !(moved > Q16_16::from_ratio(11, 10)));
 }
 

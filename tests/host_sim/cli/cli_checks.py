@@ -556,8 +556,8 @@ def check_box_faults():
     sim_dir = os.path.dirname(rec)
     fw = rows(os.path.join(sim_dir, "firmware.csv"))
     header = open(os.path.join(sim_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-6:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
-                                "model_log_likelihood_ratio", "tip_from_model"],
+    expect(header[-7:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
+                                "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm"],
            f"the new columns come last: {header[-7:]}")
     expect(header[:13] == ["time_s", "step_index", "tip_path_mm", "tip_velocity_mm_per_s", "advance_efficiency",
                            "active_stations", "max_contact_force_N", "max_contact_station", "max_contact_path_mm",
@@ -569,8 +569,8 @@ def check_box_faults():
     run_dir = os.path.join(d, "run")
     run("run", rec, "--out", run_dir, "--quiet")
     header = open(os.path.join(run_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-6:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
-                                "model_log_likelihood_ratio", "tip_from_model"],
+    expect(header[-7:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
+                                "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm"],
            f"run's firmware.csv ends with the new columns: {header[-7:]}")
     s = json.load(open(os.path.join(run_dir, "summary.json")))
     expect(s.get("box", {}).get("counters", {}).get("periods") == len(rows(os.path.join(run_dir, "firmware.csv"))),

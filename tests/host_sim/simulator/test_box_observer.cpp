@@ -69,14 +69,14 @@ TEST(BoxObserver, BoxFaultBitsAreCountedWithTheirFirstTime) {
 
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), 7U);
-    // box_faults, tracker_faults, then the four columns added after them (zero outputs here).
-    EXPECT_EQ(last_cells(lines[0], 6),
+    // box_faults, tracker_faults, then the five columns added after them (zero outputs here).
+    EXPECT_EQ(last_cells(lines[0], 7),
               "box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
-              "model_log_likelihood_ratio,tip_from_model");
-    EXPECT_EQ(last_cells(lines[1], 6), "0,0,0.00000,0.00000,0.00000,0");
-    EXPECT_EQ(last_cells(lines[2], 6), "64,0,0.00000,0.00000,0.00000,0");
-    EXPECT_EQ(last_cells(lines[3], 6), "16448,0,0.00000,0.00000,0.00000,0");  // 64 + 16384
-    EXPECT_EQ(last_cells(lines[6], 6), "0,0,0.00000,0.00000,0.00000,0");
+              "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm");
+    EXPECT_EQ(last_cells(lines[1], 7), "0,0,0.00000,0.00000,0.00000,0,0.00000");
+    EXPECT_EQ(last_cells(lines[2], 7), "64,0,0.00000,0.00000,0.00000,0,0.00000");
+    EXPECT_EQ(last_cells(lines[3], 7), "16448,0,0.00000,0.00000,0.00000,0,0.00000");  // 64 + 16384
+    EXPECT_EQ(last_cells(lines[6], 7), "0,0,0.00000,0.00000,0.00000,0,0.00000");
 }
 
 TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {

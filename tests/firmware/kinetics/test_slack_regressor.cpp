@@ -1,0 +1,174 @@
+// SlackRegressor (firmware/kinetics/slack_regressor.hpp) on cases with closed-form answers: a
+// hand-built ensemble's prediction is base + one leaf per tree by the split rule x <= t; the hand's
+// travel in and out and its distance below the deepest depth are sums; a constant force's average
+// is that force at every step, and a constant speed's approaches it as 1 - (1 - alpha)^n; the
+// uncertainty is its linear law; invalid trees are refused; and through the kinetic estimator the
+// published tip is depth - slack within the observer's bounds. Runs as GoogleTest on x86-64 /
+// aarch64 and with portable_check's runner on Cortex-M4.
+#include <cmath>
+#include <cstdint>
+
+#include "kinetics/default_reduced_tables.hpp"
+#include "kinetics/kinetics.hpp"
+#include "kinetics/slack_regressor.hpp"
+#include "portable_check.hpp"
+
+namespace {
+
+using scopekin::fixed_point::Q16_16;
+using scopekin::kinetics::SlackRegressor;
+using scopekin::kinetics::SlackTrees;
+namespace kin = scopekin::kinetics;
+
+constexpr Q16_16 kPeriod_s = Q16_16::from_ratio(1, 200);
+constexpr std::int32_t kOne = 65536;
+
+// Two trees of depth 1: tree 0 splits on the depth at 100 mm (leaves -5 / +30 mm), tree 1 on the
+// handle force at 10 N (leaves 0 / +12 mm); base 10 mm.
+constexpr std::uint8_t kFeature[] = {kin::kSlackDepth, kin::kSlackHandleForce};
+constexpr std::int32_t kThreshold[] = {100 * kOne, 10 * kOne};
+constexpr std::int32_t kLeaf[] = {-5 * kOne, 30 * kOne, 0, 12 * kOne};
+
+SlackTrees hand_built() {
+    SlackTrees trees{};
+    trees.tree_count = 2;
+    trees.depth = 1;
+    trees.feature = kFeature;
+    trees.threshold_raw = kThreshold;
+    trees.leaf_raw = kLeaf;
+    trees.base_raw = 10 * kOne;
+    for (std::int32_t& tau : trees.average_tau_s_raw)
+        tau = kOne;  // 1 s
+    trees.average_tau_s_raw[3] = 20 * kOne;
+    trees.sigma_floor_mm_raw = 3 * kOne;
+    trees.sigma_per_slack_raw = kOne / 4;
+    trees.sigma_per_metre_raw = 40 * kOne;
+    return trees;
+}
+
+SlackRegressor::Inputs at(int depth_mm, Q16_16 force_N) {
+    SlackRegressor::Inputs in{};
+    in.depth_mm = Q16_16::from_int(depth_mm);
+    in.handle_force_N = force_N;
+    in.period_s = kPeriod_s;
+    return in;
+}
+
+bool near(Q16_16 value, double expected, double tolerance) {
+    const double v = static_cast<double>(value.raw()) / 65536.0;
+    return v >= expected - tolerance && v <= expected + tolerance;
+}
+
+kin::State g_state;  // static: kinetics::State is a few KiB
+kin::Outputs g_out;
+
+}  // namespace
+
+SCOPEKIN_TEST(SlackRegressor, APredictionIsTheBasePlusOneLeafPerTree) {
+    const SlackTrees trees = hand_built();
+    SCOPEKIN_EXPECT_TRUE(trees.valid());
+    Q16_16 x[kin::kSlackFeatureCount]{};
+    x[kin::kSlackDepth] = Q16_16::from_int(100);  // on the threshold: left (x <= t)
+    x[kin::kSlackHandleForce] = Q16_16::from_int(5);
+    SCOPEKIN_EXPECT_EQ(SlackRegressor::predict(trees, x).raw(), 5 * kOne);  // 10 - 5 + 0
+    x[kin::kSlackDepth] = Q16_16::from_raw(100 * kOne + 1);  // one raw unit past it: right
+    x[kin::kSlackHandleForce] = Q16_16::from_int(11);
+    SCOPEKIN_EXPECT_EQ(SlackRegressor::predict(trees, x).raw(), 52 * kOne);  // 10 + 30 + 12
+}
+
+SCOPEKIN_TEST(SlackRegressor, TheHandsTravelIsSummedInAndOut) {
+    const SlackTrees trees = hand_built();
+    SlackRegressor::State state{};
+    SlackRegressor::Outputs out{};
+    for (int d = 20; d <= 120; ++d)
+        out = SlackRegressor::step(trees, at(d, Q16_16{}), state);
+    for (int d = 119; d >= 90; --d)
+        out = SlackRegressor::step(trees, at(d, Q16_16{}), state);
+    SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackAdvanced].raw(), 100 * kOne);
+    SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackWithdrawn].raw(), 30 * kOne);
+    SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackBelowDeepest].raw(), 30 * kOne);
+    SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackDepth].raw(), 90 * kOne);
+}
+
+SCOPEKIN_TEST(SlackRegressor, AveragesFollowTheirClosedForms) {
+    // A constant 7 N from the first step: every force average is 7 N exactly. A constant 1 mm per
+    // 5 ms step (200 mm/s): after n steps the 1 s average is 200 (1 - (1 - alpha)^n) mm/s,
+    // alpha = 0.005 (Q16.16: 328 / 65536), within 0.01 mm/s (the averages carry 32 fraction bits).
+    const SlackTrees trees = hand_built();
+    SlackRegressor::State state{};
+    SlackRegressor::Outputs out{};
+    const int steps = 400;
+    for (int n = 0; n <= steps; ++n)
+        out = SlackRegressor::step(trees, at(20 + n, Q16_16::from_int(7)), state);
+    for (std::size_t k = 0; k < kin::kSlackAverages; ++k)
+        SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackForceEma1s + k].raw(), 7 * kOne);
+    const double alpha = 328.0 / 65536.0;
+    const double speed = 1.0 / (328.0 / 65536.0);  // the period as Q16.16 holds it
+    const double expected = speed * (1.0 - std::pow(1.0 - alpha, steps));
+    SCOPEKIN_EXPECT_TRUE(near(out.features[kin::kSlackSpeedEma1s], expected, 0.01));
+    const double alpha20 = 16.0 / 65536.0;  // 0.005 / 20 s (the fourth average's), rounded
+    SCOPEKIN_EXPECT_TRUE(near(out.features[kin::kSlackSpeedEma60s],
+                              speed * (1.0 - std::pow(1.0 - alpha20, steps)), 0.01));
+}
+
+SCOPEKIN_TEST(SlackRegressor, TheUncertaintyIsItsLinearLaw) {
+    // Depth 150 mm, force 11 N: slack 52 mm; sigma = 3 + 52 / 4 + 40 x 0.15 = 22 mm.
+    const SlackTrees trees = hand_built();
+    SlackRegressor::State state{};
+    const SlackRegressor::Outputs out =
+        SlackRegressor::step(trees, at(150, Q16_16::from_int(11)), state);
+    SCOPEKIN_EXPECT_EQ(out.slack_mm.raw(), 52 * kOne);
+    SCOPEKIN_EXPECT_TRUE(near(out.uncertainty_mm, 22.0, 0.01));
+}
+
+SCOPEKIN_TEST(SlackRegressor, InvalidTreesAreRefused) {
+    SCOPEKIN_EXPECT_TRUE(kin::default_slack_trees().valid());
+    SlackTrees none = hand_built();
+    none.tree_count = 0;
+    SCOPEKIN_EXPECT_TRUE(!none.valid());
+    SlackTrees flat = hand_built();
+    flat.depth = 0;
+    SCOPEKIN_EXPECT_TRUE(!flat.valid());
+    static constexpr std::uint8_t kBadFeature[] = {kin::kSlackFeatureCount, 0};
+    SlackTrees bad = hand_built();
+    bad.feature = kBadFeature;
+    SCOPEKIN_EXPECT_TRUE(!bad.valid());
+    SlackTrees missing = hand_built();
+    missing.leaf_raw = nullptr;
+    SCOPEKIN_EXPECT_TRUE(!missing.valid());
+    SlackTrees instant = hand_built();
+    instant.average_tau_s_raw[2] = 0;
+    SCOPEKIN_EXPECT_TRUE(!instant.valid());
+    static const SlackTrees refused = bad;
+    kin::Config config = kin::default_config();
+    config.slack_trees = &refused;
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::slack_regressor);
+}
+
+SCOPEKIN_TEST(SlackRegressor, ThePublishedTipIsTheDepthLessTheSlackWithinTheBounds) {
+    // The hand-built trees in the estimator: at 150 mm with 11 N of push the slack is 52 mm, so
+    // the published tip is 98 mm (the model evidence does not trust the model at 11 N above
+    // its training's force); without trees the observer's tip is published.
+    static const SlackTrees trees = hand_built();
+    kin::Config config = kin::default_config();
+    config.slack_trees = &trees;
+    kin::init(config, g_state);
+    kin::Inputs in{};
+    in.handle_force_N = Q16_16::from_int(11);
+    in.fresh_mask = kin::kAllInputSignals;
+    for (int d = 20; d <= 150; ++d) {
+        in.insertion_mm = Q16_16::from_int(d);
+        kin::step(in, g_state, g_out);
+    }
+    SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
+    SCOPEKIN_EXPECT_EQ(g_out.tip_path_mm.raw(), 98 * kOne);
+    SCOPEKIN_EXPECT_TRUE(near(g_out.tip_uncertainty_mm, 22.0, 0.01));
+    config.slack_trees = nullptr;
+    kin::init(config, g_state);
+    for (int d = 20; d <= 150; ++d) {
+        in.insertion_mm = Q16_16::from_int(d);
+        kin::step(in, g_state, g_out);
+    }
+    SCOPEKIN_EXPECT_EQ(g_out.tip_path_mm.raw(), g_out.observer_tip_path_mm.raw());
+}
