@@ -46,7 +46,8 @@ def columns(path, names):
         header = f.readline().strip().split(",")
     missing = [n for n in names if n not in header]
     if missing:
-        raise SystemExit(f"{path}: no column {missing}")
+        print(f"fit_slack_regressor.py: {path}: no column {missing}", file=sys.stderr)
+        sys.exit(2)
     a = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=[header.index(n) for n in names])
     a = a.reshape(-1, len(names))
     return {n: a[:, i] for i, n in enumerate(names)}
@@ -139,7 +140,8 @@ def rms(e):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
+                                 epilog="Exit status: 0 written, 2 bad input.")
     ap.add_argument("eval_dir")
     ap.add_argument("--out", required=True, help="the C++ source to write")
     ap.add_argument("--report", help="JSON: held-out errors per case, the uncertainty law")
@@ -151,7 +153,9 @@ def main():
         if c:
             cases.append(c)
     if len(cases) < 4:
-        raise SystemExit(f"{a.eval_dir}: {len(cases)} complete cases, need at least 4")
+        print(f"fit_slack_regressor.py: {a.eval_dir}: {len(cases)} complete cases (cases/*/summary.json "
+              "with status complete), need at least 4", file=sys.stderr)
+        sys.exit(2)
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
     held_out, per_case = [], []
