@@ -14,11 +14,15 @@ using fixed_point::Q16_16;
 
 [[nodiscard]] const ReducedTablesQ16& default_reduced_tables() noexcept;
 
-/// Config{} with the default tables and the fitted slack regressor.
+/// Config{} with the default tables, the fitted slack regressor, contact force trees and loop
+/// alarm.
 [[nodiscard]] inline Config default_config() noexcept {
     Config config{};
     config.tables = &default_reduced_tables();
     config.slack_trees = &default_slack_trees();
+    config.contact_force_trees = &default_contact_force_trees();
+    config.loop_alarm_trees = &default_loop_alarm_trees();
+    config.loop_alarm = default_loop_alarm();
     return config;
 }
 

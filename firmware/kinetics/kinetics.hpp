@@ -22,11 +22,16 @@
 //      uncertainty and its velocity (mean over the last
 //      kVelocityWindow steps, so it lags by half that window); the reduced model's own tip
 //      (model_tip_path_mm); each station's forces and stick / slip state, placed behind the
-//      published tip as on the scope; the largest contact force and where it acts.
+//      published tip as on the scope; the largest contact force (the model's while trusted, else
+//      the contact force trees' regression on the slack regressor's features, with its
+//      uncertainty; the model's own in model_max_contact_force_N) and where it acts (the model's).
 //   5. Monitors (firmware/monitors): advance efficiency, self-lock (the tip station stuck while
 //      the handle advances, T_on = 36 steps; confirmed by falling efficiency), contact-force
-//      warning / critical. They read the reduced model (its tip and stick states, on which the
-//      self-lock monitor was designed and verified), not the observer.
+//      warning / critical. They read the reduced model (its tip, stick states and largest
+//      force, on which they were designed and verified), not the observer or the trees. While
+//      the model is not trusted the published self-lock alarm is the loop alarm from evidence
+//      (evidence_alarm.hpp: trees on the slack regressor's features, debounced); the model's own
+//      is model_self_lock_alarm.
 //
 // Bad input (Config limits; all Q16.16):
 //   * no fresh sample: the last valid value is held and the signal's "stale" flag is set for as
@@ -45,6 +50,7 @@
 #include <cstdint>
 
 #include "contact/gauss_seidel_contact.hpp"
+#include "kinetics/evidence_alarm.hpp"
 #include "kinetics/kinetics_io.hpp"
 #include "kinetics/model_evidence.hpp"
 #include "kinetics/reduced_kinetics.hpp"
@@ -98,19 +104,30 @@ struct Config {
     /// The slack regressor's trees (slack_regressor.hpp; default_config() sets the fitted ones).
     /// nullptr: no regressor, the observer's tip is published (as before it existed).
     const SlackTrees* slack_trees{nullptr};
+    /// Trees on the same features for the largest contact force (default_config() sets the
+    /// fitted ones). nullptr: the reduced model's largest force is published (as before).
+    /// Needs slack_trees (the features are the slack regressor's) with the same time constants.
+    const SlackTrees* contact_force_trees{nullptr};
+    /// The loop alarm from evidence (evidence_alarm.hpp; default_config() sets the fitted trees
+    /// and settings): the published self-lock alarm while the model is not trusted. nullptr: the
+    /// reduced model's self-lock monitor alone (as before). Needs slack_trees, same averages.
+    const SlackTrees* loop_alarm_trees{nullptr};
+    EvidenceAlarm::Config loop_alarm{};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
 enum class ConfigFault : std::uint8_t {
     none,
-    period,            ///< period_s outside (0, 1] s
-    contact_settings,  ///< sweeps or local iterations 0 or above 64
-    limits,            ///< an input range empty or a limit not positive
-    tables,            ///< the reduced model's tables failed check_reduced_tables
-    monitors,          ///< a monitor refused its Config
-    tip_observer,      ///< the tip observer refused its Config
-    model_evidence,    ///< the model evidence refused its Config
-    slack_regressor,   ///< the slack regressor's trees are not valid()
+    period,                   ///< period_s outside (0, 1] s
+    contact_settings,         ///< sweeps or local iterations 0 or above 64
+    limits,                   ///< an input range empty or a limit not positive
+    tables,                   ///< the reduced model's tables failed check_reduced_tables
+    monitors,                 ///< a monitor refused its Config
+    tip_observer,             ///< the tip observer refused its Config
+    model_evidence,           ///< the model evidence refused its Config
+    slack_regressor,          ///< the slack regressor's trees are not valid()
+    contact_force_regressor,  ///< the force trees not valid(), or without matching slack trees
+    loop_alarm,               ///< the loop alarm's trees or settings not valid(), or no slack trees
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
@@ -135,6 +152,7 @@ struct State {
     TipObserver::State tip_observer{};
     ModelEvidence::State model_evidence{};
     SlackRegressor::State slack{};
+    EvidenceAlarm::State loop_alarm{};
 };
 
 void init(const Config& config, State& state) noexcept;

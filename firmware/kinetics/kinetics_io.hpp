@@ -113,11 +113,20 @@ struct Outputs {
     Q16_16 advance_efficiency{};    ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};
     std::uint8_t active_stations{0};  ///< stations inside the colon this step
-    Q16_16 max_contact_force_N{};     ///< largest |f| over stations
+    /// The largest contact force: the reduced model's (largest |f| over the stations) while the
+    /// handle's evidence trusts the model, else the force trees' regression on the handle's
+    /// history (Config::contact_force_trees; >= 0); the station and path are the model's.
+    Q16_16 max_contact_force_N{};
+    Q16_16 max_contact_force_uncertainty_N{};  ///< one SD of max_contact_force_N
+    Q16_16 model_max_contact_force_N{};        ///< the reduced model's largest |f| over stations
     std::uint8_t max_contact_station{0};
     Q16_16 max_contact_path_mm{};     ///< where along the colon
     std::uint8_t distal_sticking{0};  ///< distal stations (< kDistalStations) in stick
+    /// The loop / self-lock alarm: the reduced model's self-lock monitor while the handle's evidence
+    /// trusts the model, else the loop alarm from evidence (Config::loop_alarm_trees).
     bool self_lock_alarm{false};
+    bool model_self_lock_alarm{false};  ///< the reduced model's self-lock monitor
+    Q16_16 loop_score{};  ///< the loop alarm's score (0 without its trees; evidence_alarm.hpp)
     ContactForceLevel contact_force_level{ContactForceLevel::normal};
     std::uint32_t fault_flags{0};
 };

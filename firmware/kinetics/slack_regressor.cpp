@@ -38,7 +38,13 @@ bool SlackTrees::valid() const noexcept {
         if (feature[i] >= kSlackFeatureCount) return false;
     for (const std::int32_t tau : average_tau_s_raw)
         if (tau <= 0) return false;
-    return sigma_floor_mm_raw >= 0 && sigma_per_slack_raw >= 0 && sigma_per_metre_raw >= 0;
+    return sigma_floor_raw >= 0 && sigma_per_prediction_raw >= 0 && sigma_per_metre_raw >= 0;
+}
+
+bool same_features(const SlackTrees& a, const SlackTrees& b) noexcept {
+    for (std::size_t k = 0; k < kSlackAverages; ++k)  // bound: kSlackAverages
+        if (a.average_tau_s_raw[k] != b.average_tau_s_raw[k]) return false;
+    return true;
 }
 
 Q16_16 SlackRegressor::predict(const SlackTrees& trees,
@@ -90,12 +96,16 @@ SlackRegressor::Outputs SlackRegressor::step(const SlackTrees& trees, const Inpu
             average(state.speed_ema_q32[k], speed_mm_per_s, alpha_raw);
     }
     out.slack_mm = predict(trees, out.features);
-    const Q16_16 magnitude = out.slack_mm < Q16_16{} ? -out.slack_mm : out.slack_mm;
-    out.uncertainty_mm =
-        Q16_16::from_raw(trees.sigma_floor_mm_raw) +
-        Q16_16::from_raw(trees.sigma_per_slack_raw) * magnitude +
-        Q16_16::from_raw(trees.sigma_per_metre_raw) * (inputs.depth_mm / Q16_16::from_int(1000));
+    out.uncertainty_mm = uncertainty(trees, out.slack_mm, inputs.depth_mm);
     return out;
+}
+
+Q16_16 SlackRegressor::uncertainty(const SlackTrees& trees, Q16_16 prediction,
+                                   Q16_16 depth_mm) noexcept {
+    const Q16_16 magnitude = prediction < Q16_16{} ? -prediction : prediction;
+    return Q16_16::from_raw(trees.sigma_floor_raw) +
+           Q16_16::from_raw(trees.sigma_per_prediction_raw) * magnitude +
+           Q16_16::from_raw(trees.sigma_per_metre_raw) * (depth_mm / Q16_16::from_int(1000));
 }
 
 }  // namespace scopekin::kinetics

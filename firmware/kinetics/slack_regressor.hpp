@@ -80,9 +80,10 @@ struct SlackTrees {
     const std::int32_t* leaf_raw{nullptr};
     std::int32_t base_raw{0};
     std::int32_t average_tau_s_raw[kSlackAverages]{};  ///< the averages' time constants [s]
-    /// Uncertainty (one SD) of the published tip: floor + per_slack * |slack| + per_metre * depth.
-    std::int32_t sigma_floor_mm_raw{0};
-    std::int32_t sigma_per_slack_raw{0};
+    /// Uncertainty (one SD, in the prediction's unit): floor + per_prediction * |prediction| +
+    /// per_metre * depth [m] (for the slack: of the published tip, mm).
+    std::int32_t sigma_floor_raw{0};
+    std::int32_t sigma_per_prediction_raw{0};
     std::int32_t sigma_per_metre_raw{0};
     const char* source{""};  ///< what it was fitted on, for reports
 
@@ -94,6 +95,15 @@ struct SlackTrees {
 /// The trees fitted on the development set (firmware/kinetics/generated/slack_trees.cpp, written by
 /// host_sim/evaluate/fit_slack_regressor.py).
 [[nodiscard]] const SlackTrees& default_slack_trees() noexcept;
+
+/// Trees on the same features for the largest station contact force [N] (uncertainty law in N:
+/// floor + per_slack * |force| + per_metre * depth), fitted on the development set
+/// (firmware/kinetics/generated/contact_force_trees.cpp, fit_slack_regressor.py --target
+/// contact_force).
+[[nodiscard]] const SlackTrees& default_contact_force_trees() noexcept;
+
+/// The same averages (time constants), so one feature vector serves both ensembles.
+[[nodiscard]] bool same_features(const SlackTrees& a, const SlackTrees& b) noexcept;
 
 struct SlackRegressor {
     struct State {
@@ -122,6 +132,9 @@ struct SlackRegressor {
     /// The ensemble's prediction for one feature vector (exposed for tests and the fit's check).
     [[nodiscard]] static Q16_16 predict(const SlackTrees& trees,
                                         const Q16_16 (&features)[kSlackFeatureCount]) noexcept;
+    /// The trees' uncertainty law at this prediction and depth (one SD, the prediction's unit).
+    [[nodiscard]] static Q16_16 uncertainty(const SlackTrees& trees, Q16_16 prediction,
+                                            Q16_16 depth_mm) noexcept;
 };
 
 }  // namespace scopekin::kinetics

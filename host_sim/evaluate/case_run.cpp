@@ -173,7 +173,9 @@ static void cut_where_the_scope_went_through_the_wall(CaseRun& run, double lost_
     cut(run.box_model_tip_path_mm);
     cut(run.box_tip_uncertainty_mm);
     cut(run.box_max_contact_force_N);
+    cut(run.box_model_max_contact_force_N);
     cut(run.box_self_lock);
+    cut(run.box_model_self_lock);
     cut(run.box_contact_level);
     cut(run.box_fault_flags);
     cut(run.handle_force_N);
@@ -242,6 +244,14 @@ CaseRun read_case_run(const fs::path& folder) {
         fw_columns.emplace_back("tip_uncertainty_mm");
         fw_columns.emplace_back("model_tip_path_mm");
     }
+    // model_max_contact_force_N: written since the contact force trees (2026-11-28); before
+    // them the published largest force was the model's.
+    const bool force_trees = has_column(fw_file, "model_max_contact_force_N");
+    if (force_trees) fw_columns.emplace_back("model_max_contact_force_N");
+    // model_self_lock_alarm: written since the loop alarm from evidence (2026-11-28); before it
+    // the published alarm was the model's.
+    const bool loop_alarm = has_column(fw_file, "model_self_lock_alarm");
+    if (loop_alarm) fw_columns.emplace_back("model_self_lock_alarm");
     const Columns fw = read_columns(fw_file, fw_columns);
     if (truth.lines.size() != fw.lines.size())
         throw CaseDataError(truth_file.string() + " has " + std::to_string(truth.lines.size()) +
@@ -268,6 +278,13 @@ CaseRun read_case_run(const fs::path& folder) {
     } else {  // before the tip observer the published tip was the model's
         run.box_model_tip_path_mm = run.box_tip_path_mm;
     }
+    const std::size_t force_column = fw_columns.size() - (loop_alarm ? 2U : 1U);
+    run.box_model_max_contact_force_N =
+        force_trees ? numbers(fw, force_column, fw_file, "model_max_contact_force_N")
+                    : run.box_max_contact_force_N;
+    run.box_model_self_lock = loop_alarm ? whole<std::uint8_t>(fw, fw_columns.size() - 1U, fw_file,
+                                                               "model_self_lock_alarm")
+                                         : run.box_self_lock;
     for (std::size_t k = 1; k < run.time_s.size(); ++k)
         if (!(run.time_s[k] > run.time_s[k - 1]))
             throw CaseDataError(truth_file.string() + ": line " + std::to_string(truth.lines[k]) +

@@ -60,7 +60,13 @@ struct CaseRun {
     std::vector<double> box_model_tip_path_mm;
     std::vector<double> box_tip_uncertainty_mm;  ///< one SD; empty for runs before the observer
     std::vector<double> box_max_contact_force_N;
+    /// The reduced model's largest force (column model_max_contact_force_N); runs written before
+    /// the contact force trees lack the column, and their published force was the model's.
+    std::vector<double> box_model_max_contact_force_N;
     std::vector<std::uint8_t> box_self_lock;
+    /// The reduced model's self-lock alarm (column model_self_lock_alarm); runs written before
+    /// the loop alarm from evidence lack it, and their published alarm was the model's.
+    std::vector<std::uint8_t> box_model_self_lock;
     std::vector<std::uint8_t> box_contact_level;
     std::vector<std::uint32_t> box_fault_flags;
     // recording.csv: the handle force and insertion the box received, at each period (the last

@@ -8,8 +8,10 @@ namespace scopekin::evaluate {
 namespace {
 
 /// (a) The box as it is: firmware.csv's published outputs — its tip (the reduced model's while
-/// the handle's evidence trusts it, else the tip observer's) and its uncertainty; the largest
-/// contact force, the alarms and the faults from the reduced model.
+/// the handle's evidence trusts it, else the slack regressor's) and its uncertainty; the largest
+/// contact force (likewise the model's or the contact force trees'); the loop alarm (likewise the
+/// model's self-lock or the loop alarm from evidence); the contact-force level and the faults
+/// from the reduced model.
 EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     EstimatorOutput o;
     o.tip_path_mm = run.box_tip_path_mm;
@@ -21,11 +23,15 @@ EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     return o;
 }
 
-/// (b) The depth replay: the reduced model's own tip (firmware.csv model_tip_path_mm), the box's
-/// published tip until the tip observer; its forces and alarms are the box's (a).
+/// (b) The depth replay: the reduced model's own tip, largest force and self-lock alarm
+/// (firmware.csv model_tip_path_mm, model_max_contact_force_N, model_self_lock_alarm: the box's
+/// published ones until the tip observer, the contact force trees and the loop alarm from
+/// evidence); its contact-force level is the box's (a), which is the model's.
 EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext& context) {
     EstimatorOutput o = box(run, context);
     o.tip_path_mm = run.box_model_tip_path_mm;
+    o.max_force_N = run.box_model_max_contact_force_N;
+    o.loop_alarm = run.box_model_self_lock;
     o.tip_uncertainty_mm.clear();
     return o;
 }
@@ -59,11 +65,10 @@ EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
 const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
         {"box",
-         "the box (slack regressor, the model's tip where the handle agrees with it; forces and "
-         "alarms from the reduced model)",
+         "the box (slack regressor, contact force trees and loop alarm from evidence; the model's "
+         "where the handle agrees with it; contact-force level from the reduced model)",
          box},
-        {"depth_replay", "depth replay (the reduced model's tip; forces and alarms as the box's)",
-         depth_replay},
+        {"depth_replay", "depth replay (the reduced model's tip, force and alarms)", depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},
         {"insertion_depth", "insertion depth as the tip (baseline, no alarms)", insertion_depth},
     };

@@ -3,6 +3,11 @@
 development set and writes its trees as the firmware's C++ source.
 
 usage: fit_slack_regressor.py EVAL_DIR --out slack_trees.cpp [--report fit.json]
+                              [--target slack | contact_force]
+
+--target slack (the default) fits depth - the true tip; --target contact_force fits the truth's
+largest station force [N] (truth.csv max_station_force_N) on the same features: the box's largest
+contact force outside the model evidence's trust (default_contact_force_trees()).
 
 EVAL_DIR is the output of `scopekin evaluate model/scenarios/evaluation/development.json` (each
 case's truth.csv, recording.csv, firmware.csv and summary.json). Only complete cases are used, each
@@ -46,7 +51,7 @@ def columns(path, names):
         header = f.readline().strip().split(",")
     missing = [n for n in names if n not in header]
     if missing:
-        print(f"fit_slack_regressor.py: {path}: no column {missing}", file=sys.stderr)
+        print(f"{os.path.basename(sys.argv[0])}: {path}: no column {missing}", file=sys.stderr)
         sys.exit(2)
     a = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=[header.index(n) for n in names])
     a = a.reshape(-1, len(names))
@@ -71,6 +76,9 @@ def load_case(folder):
         header = f.readline().strip().split(",")
     observer = "observer_tip_path_mm" if "observer_tip_path_mm" in header else "tip_path_mm"
     fw = columns(os.path.join(folder, "firmware.csv"), [observer])
+    model_force = "model_max_contact_force_N" if "model_max_contact_force_N" in header else "max_contact_force_N"
+    fw_force = columns(os.path.join(folder, "firmware.csv"), [model_force])[model_force]
+    force_truth = columns(os.path.join(folder, "truth.csv"), ["max_station_force_N"])
     rec = columns(os.path.join(folder, "recording.csv"), ["time_s", "handle_force_N", "insertion_mm"])
     t = truth["time_s"]
     n = min(t.size, fw[observer].size)
@@ -87,16 +95,18 @@ def load_case(folder):
     alphas = [q16(q16(PERIOD_S) / tau) for tau in TAUS_S]
     cols += [ema(force, a, force[0]) for a in alphas]
     cols += [ema(speed, a, 0.0) for a in alphas]
-    return {"name": os.path.basename(folder.rstrip("/")), "X": np.column_stack(cols),
-            "y": depth - truth["tip_path_mm"][:n], "depth": depth}
+    return {"name": os.path.basename(folder.rstrip("/")), "X": np.column_stack(cols), "time_s": t[:n],
+            "y": depth - truth["tip_path_mm"][:n], "depth": depth,
+            "force_N": np.nan_to_num(force_truth["max_station_force_N"][:n], nan=0.0),
+            "model_force_N": fw_force[:n]}
 
 
-def model():
-    return GradientBoostingRegressor(n_estimators=TREES, max_depth=DEPTH, learning_rate=RATE,
+def model(rate=RATE):
+    return GradientBoostingRegressor(n_estimators=TREES, max_depth=DEPTH, learning_rate=rate,
                                      subsample=0.5, min_samples_leaf=100, random_state=1)
 
 
-def complete_tree(tree):
+def complete_tree(tree, rate=RATE):
     """(features, thresholds, leaves) of a depth-DEPTH complete tree equal to sklearn's `tree`:
     a leaf above the last level becomes a node that always goes left, its value in every leaf."""
     internal = 2 ** DEPTH - 1
@@ -105,7 +115,7 @@ def complete_tree(tree):
 
     def fill(node, slot, level):
         if level == DEPTH:
-            leaf[slot - internal] = t.value[node][0][0] * RATE
+            leaf[slot - internal] = t.value[node][0][0] * rate
             return
         if t.children_left[node] == -1:  # a leaf above the last level
             feature[slot], threshold[slot] = 0, 2 ** 31 - 1
@@ -139,13 +149,34 @@ def rms(e):
     return float(np.sqrt(np.mean(np.square(e))))
 
 
+# What each target fits: its truth column, the baseline it is compared with in the report, the
+# report's key for the held-out errors, and the C++ function the source defines.
+TARGETS = {
+    "slack": {"y": "y", "baseline": "observer", "unit": "mm", "errors": "held_out_tip_rms_mm",
+              "function": "default_slack_trees", "what": "the slack regressor's trees",
+              "law": ("floor_mm", "per_slack", "per_metre_mm")},
+    "contact_force": {"y": "force_N", "baseline": "model", "unit": "N",
+                      "errors": "held_out_force_rms_N", "function": "default_contact_force_trees",
+                      "what": "the largest contact force's trees (same features)",
+                      "law": ("floor_N", "per_newton", "per_metre_N")},
+}
+
+
+def baseline(c, target):
+    """What the box published before the fit: the observer's slack, the reduced model's force."""
+    return c["X"][:, 5] if target == "slack" else c["model_force_N"]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
                                  epilog="Exit status: 0 written, 2 bad input.")
     ap.add_argument("eval_dir")
     ap.add_argument("--out", required=True, help="the C++ source to write")
     ap.add_argument("--report", help="JSON: held-out errors per case, the uncertainty law")
+    ap.add_argument("--target", choices=sorted(TARGETS), default="slack",
+                    help="slack: depth - tip [mm] (default); contact_force: the largest station force [N]")
     a = ap.parse_args()
+    spec = TARGETS[a.target]
     cases = []
     for f in sorted(glob.glob(os.path.join(a.eval_dir, "cases", "*", "summary.json"))):
         c = load_case(os.path.dirname(f))
@@ -156,6 +187,7 @@ def main():
         print(f"fit_slack_regressor.py: {a.eval_dir}: {len(cases)} complete cases (cases/*/summary.json "
               "with status complete), need at least 4", file=sys.stderr)
         sys.exit(2)
+    target = lambda c: c[spec["y"]]
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
     held_out, per_case = [], []
@@ -163,13 +195,15 @@ def main():
         print(f"fit: leaving out patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
         train = [c for c in cases if patient(c) != p]
         m = model().fit(np.vstack([c["X"][::EVERY] for c in train]),
-                        np.concatenate([c["y"][::EVERY] for c in train]))
+                        np.concatenate([target(c)[::EVERY] for c in train]))
         for c in (c for c in cases if patient(c) == p):
             pred = m.predict(c["X"])
-            held_out.append((pred, c["y"], c["depth"]))
-            per_case.append({"case": c["name"], "tip_rms_mm_regressor": rms(pred - c["y"]),
-                             "tip_rms_mm_observer": rms(c["X"][:, 5] - c["y"])})
-    # Uncertainty: |error| ~ floor + a |slack| + b depth[m], least squares, non-negative, then scaled.
+            held_out.append((pred, target(c), c["depth"]))
+            per_case.append({"case": c["name"],
+                             "rms_regressor": rms(pred - target(c)),
+                             f"rms_{spec['baseline']}": rms(baseline(c, a.target) - target(c))})
+    # Uncertainty: |error| ~ floor + a |prediction| + b depth[m], least squares, non-negative,
+    # then scaled so that 68 % of the held-out periods lie within one SD.
     pred = np.concatenate([h[0] for h in held_out]); y = np.concatenate([h[1] for h in held_out])
     depth = np.concatenate([h[2] for h in held_out])
     A = np.column_stack([np.ones_like(pred), np.abs(pred), depth / 1000])
@@ -182,42 +216,49 @@ def main():
 
     print("fit: the final fit on every case", file=sys.stderr)
     final = model().fit(np.vstack([c["X"][::EVERY] for c in cases]),
-                        np.concatenate([c["y"][::EVERY] for c in cases]))
+                        np.concatenate([target(c)[::EVERY] for c in cases]))
     trees = [complete_tree(e[0]) for e in final.estimators_]
     base_raw = int(round(float(final.init_.constant_.ravel()[0]) * 65536))
     X = np.vstack([c["X"][::EVERY] for c in cases])
     mismatch = float(np.max(np.abs(firmware_predict(trees, base_raw, X) - final.predict(X))))
 
-    r = [c["tip_rms_mm_regressor"] for c in per_case]; o = [c["tip_rms_mm_observer"] for c in per_case]
-    summary = {"cases": len(cases), "patients": len(patients), "features": FEATURES,
-               "trees": TREES, "depth": DEPTH, "learning_rate": RATE, "every_nth_period": EVERY,
-               "held_out_tip_rms_mm": {"regressor": {"median": float(np.median(r)), "p90": float(np.percentile(r, 90)), "worst": float(np.max(r))},
-                                       "observer": {"median": float(np.median(o)), "p90": float(np.percentile(o, 90)), "worst": float(np.max(o))}},
-               "uncertainty": {"floor_mm": float(coef[0]), "per_slack": float(coef[1]), "per_metre_mm": float(coef[2]),
-                               "held_out_within_1sd": within, "held_out_within_2sd": within2},
-               "firmware_vs_sklearn_max_abs_mm": mismatch, "per_case": per_case}
+    spread = lambda v: {"median": float(np.median(v)), "p90": float(np.percentile(v, 90)), "worst": float(np.max(v))}
+    summary = {"target": a.target, "unit": spec["unit"], "cases": len(cases), "patients": len(patients),
+               "features": FEATURES, "trees": TREES, "depth": DEPTH, "learning_rate": RATE,
+               "every_nth_period": EVERY,
+               spec["errors"]: {"regressor": spread([c["rms_regressor"] for c in per_case]),
+                                spec["baseline"]: spread([c[f"rms_{spec['baseline']}"] for c in per_case])},
+               "uncertainty": dict(zip(spec["law"], map(float, coef)),
+                                   held_out_within_1sd=within, held_out_within_2sd=within2),
+               "firmware_vs_sklearn_max_abs": mismatch, "per_case": per_case}
     print(json.dumps({k: v for k, v in summary.items() if k != "per_case"}, indent=1), file=sys.stderr)
     if a.report:
         with open(a.report, "w") as f:
             json.dump(summary, f, indent=1)
-    write_source(a.out, trees, base_raw, coef, summary, a.eval_dir)
+    write_source(a.out, trees, base_raw, coef, summary, spec)
 
 
-def write_source(path, trees, base_raw, coef, summary, eval_dir):
+def write_source(path, trees, base_raw, coef, summary, spec, extra=""):
+    """The C++ source: the trees as SlackTrees returned by spec["function"](), then `extra` (more
+    C++ inside the namespace, e.g. an alarm's settings)."""
     flat = lambda key: [v for t in trees for v in t[key]]
     def rows(values, per_line=12):
         return "\n".join("    " + ", ".join(str(v) for v in values[i:i + per_line]) + ","
                          for i in range(0, len(values), per_line))
-    h = summary["held_out_tip_rms_mm"]
-    source = (f"fitted by host_sim/evaluate/fit_slack_regressor.py on {summary['cases']} development cases "
-              f"({summary['patients']} patients); held-out tip RMS median {h['regressor']['median']:.1f} mm, "
-              f"p90 {h['regressor']['p90']:.1f} mm")
-    text = f"""// Generated by host_sim/evaluate/fit_slack_regressor.py (do not edit): the slack regressor's trees
-// (firmware/kinetics/slack_regressor.hpp), {source}.
+    if "source" in spec:  # another fit's own description (fit_loop_alarm.py)
+        source = spec["source"]
+    else:
+        h, unit = summary[spec["errors"]], spec["unit"]
+        source = (f"fitted by host_sim/evaluate/fit_slack_regressor.py on {summary['cases']} development cases "
+                  f"({summary['patients']} patients); held-out RMS median {h['regressor']['median']:.1f} {unit}, "
+                  f"p90 {h['regressor']['p90']:.1f} {unit}")
+    generator = spec.get("generator", f"host_sim/evaluate/fit_slack_regressor.py --target {summary['target']}")
+    text = f"""// Generated by {generator} (do not edit):
+// {spec['what']} ({spec.get('header', 'firmware/kinetics/slack_regressor.hpp')}), {source}.
 // {TREES} trees of depth {DEPTH}, features {", ".join(FEATURES)}.
 #include <cstdint>
 
-#include "kinetics/slack_regressor.hpp"
+#include "{spec.get('header', 'kinetics/slack_regressor.hpp')}"
 
 namespace scopekin::kinetics {{
 namespace {{
@@ -234,7 +275,7 @@ constexpr std::int32_t kLeafRaw[] = {{
 
 }}  // namespace
 
-const SlackTrees& default_slack_trees() noexcept {{
+const SlackTrees& {spec['function']}() noexcept {{
     static constexpr SlackTrees trees{{
         {TREES}U, {DEPTH}U, kFeature, kThresholdRaw, kLeafRaw, {base_raw},
         {{{", ".join(str(int(round(t * 65536))) for t in TAUS_S)}}},
@@ -242,7 +283,7 @@ const SlackTrees& default_slack_trees() noexcept {{
         "{source}"}};
     return trees;
 }}
-
+{extra}
 }}  // namespace scopekin::kinetics
 """
     tmp = path + ".part"

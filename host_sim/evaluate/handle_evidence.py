@@ -33,8 +33,9 @@ figures are the cross-validated ones on DEV_DIR's patients; with --test the lear
 all of DEV_DIR and scored on each test folder (report only: never tune on it). Writes OUT/
 handle_evidence.json, handle_evidence_loop.csv (one row per set x style x threshold),
 handle_evidence_errors.csv (one row per set x case) and handle_evidence.png (one per test set,
-handle_evidence_NAME.png). Exit 0 done, 2 bad input (a folder without evaluated cases, a case
-without its files, too few patients for the folds).
+handle_evidence_NAME.png). Cases whose run stopped (summary.json status other than "complete")
+are skipped with a message, as the scorecard leaves them unscored. Exit 0 done, 2 bad input (a
+folder without evaluated cases, a case without its files, too few patients for the folds).
 """
 import argparse
 import csv
@@ -59,6 +60,15 @@ BUDGETS_PER_10MIN = [2.0, 0.5]  # issue 21's bound and goal for false loop alarm
 def fail(message):
     print(f"handle_evidence: {message}", file=sys.stderr)
     sys.exit(2)
+
+
+def case_status(folder):
+    """The run's status from its summary.json ("complete", "failed", ...; None without one or
+    without the field)."""
+    try:
+        return json.load(open(os.path.join(folder, "summary.json"))).get("status")
+    except (OSError, ValueError):
+        return None
 
 
 def read_case(folder):
@@ -169,6 +179,10 @@ def load_set(folder):
     out = []
     for i, c in enumerate(cases):
         print(f"handle_evidence: reading {folder} [{i + 1}/{len(cases)}]", file=sys.stderr, end="\r")
+        status = case_status(c)
+        if status not in (None, "complete"):  # a run that stopped has no estimates: not scored
+            print(f"\nhandle_evidence: {c}: skipped (status {status})", file=sys.stderr)
+            continue
         case = read_case(c)
         name = os.path.basename(c)
         case.update(name=name, patient=name.split("-")[0],

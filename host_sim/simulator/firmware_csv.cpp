@@ -32,7 +32,9 @@ std::string firmware_csv_header() {
     }
     return h +
            ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
-           "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm";
+           "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm,"
+           "max_contact_force_uncertainty_N,model_max_contact_force_N,model_self_lock_alarm,"
+           "loop_score";
 }
 
 std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
@@ -67,6 +69,10 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
     put_q(line, o.model_log_likelihood_ratio);
     put_u(line, o.tip_from_model ? 1U : 0U);
     put_q(line, o.observer_tip_path_mm);
+    put_q(line, o.max_contact_force_uncertainty_N);
+    put_q(line, o.model_max_contact_force_N);
+    put_u(line, o.model_self_lock_alarm ? 1U : 0U);
+    put_q(line, o.loop_score);
     return line;
 }
 

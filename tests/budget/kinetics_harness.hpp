@@ -98,7 +98,7 @@ constexpr std::size_t aggregate_field_count() noexcept {
 
 }  // namespace detail
 
-static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 18U,
+static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 22U,
               "kinetics::Outputs changed: hash every field in hash_outputs(), then update this "
               "count and regenerate the golden hashes (tests/firmware/data/README.md)");
 static_assert(detail::aggregate_field_count<kinetics::StationEstimate>() == 5U,
@@ -129,10 +129,14 @@ constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noe
     }
     hash.u8(outputs.active_stations);
     hash.q16(outputs.max_contact_force_N);
+    hash.q16(outputs.max_contact_force_uncertainty_N);
+    hash.q16(outputs.model_max_contact_force_N);
     hash.u8(outputs.max_contact_station);
     hash.q16(outputs.max_contact_path_mm);
     hash.u8(outputs.distal_sticking);
     hash.boolean(outputs.self_lock_alarm);
+    hash.boolean(outputs.model_self_lock_alarm);
+    hash.q16(outputs.loop_score);
     hash.enumeration(outputs.contact_force_level);
     hash.u32(outputs.fault_flags);
 }

@@ -97,10 +97,14 @@ SCOPEKIN_TEST(OutputIdentity, EveryFieldOfOutputsChangesTheHash) {
         [](Outputs& o, Q16_16 v) { o.advance_efficiency = v; },
         [](Outputs& o, Q16_16) { o.active_stations = 1U; },
         [](Outputs& o, Q16_16 v) { o.max_contact_force_N = v; },
+        [](Outputs& o, Q16_16 v) { o.max_contact_force_uncertainty_N = v; },
+        [](Outputs& o, Q16_16 v) { o.model_max_contact_force_N = v; },
         [](Outputs& o, Q16_16) { o.max_contact_station = 1U; },
         [](Outputs& o, Q16_16 v) { o.max_contact_path_mm = v; },
         [](Outputs& o, Q16_16) { o.distal_sticking = 1U; },
         [](Outputs& o, Q16_16) { o.self_lock_alarm = true; },
+        [](Outputs& o, Q16_16) { o.model_self_lock_alarm = true; },
+        [](Outputs& o, Q16_16 v) { o.loop_score = v; },
         [](Outputs& o, Q16_16) {
             o.contact_force_level = scopekin::kinetics::ContactForceLevel::warning;
         },

@@ -11,8 +11,8 @@
 namespace scopekin::test_data {
 
 inline constexpr OutputHash golden_output_hashes[] = {
-    {"synthetic_degraded_inputs", 1000U, 0x5015B1F026378DA3ULL},
-    {"synthetic_insertion_roll", 3200U, 0x727CC8508EB866A6ULL},
+    {"synthetic_degraded_inputs", 1000U, 0x8CB5B0771867ED1DULL},
+    {"synthetic_insertion_roll", 3200U, 0x5006348B32B680A1ULL},
 };
 
 }  // namespace scopekin::test_data

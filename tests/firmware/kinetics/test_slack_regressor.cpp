@@ -3,7 +3,9 @@
 // travel in and out and its distance below the deepest depth are sums; a constant force's average
 // is that force at every step, and a constant speed's approaches it as 1 - (1 - alpha)^n; the
 // uncertainty is its linear law; invalid trees are refused; and through the kinetic estimator the
-// published tip is depth - slack within the observer's bounds. Runs as GoogleTest on x86-64 /
+// published tip is depth - slack within the observer's bounds; the contact force trees read the
+// same features and set the largest contact force (>= 0) outside the model's trust, and refuse to
+// run without slack trees of the same averages. Runs as GoogleTest on x86-64 /
 // aarch64 and with portable_check's runner on Cortex-M4.
 #include <cmath>
 #include <cstdint>
@@ -40,8 +42,8 @@ SlackTrees hand_built() {
     for (std::int32_t& tau : trees.average_tau_s_raw)
         tau = kOne;  // 1 s
     trees.average_tau_s_raw[3] = 20 * kOne;
-    trees.sigma_floor_mm_raw = 3 * kOne;
-    trees.sigma_per_slack_raw = kOne / 4;
+    trees.sigma_floor_raw = 3 * kOne;
+    trees.sigma_per_prediction_raw = kOne / 4;
     trees.sigma_per_metre_raw = 40 * kOne;
     return trees;
 }
@@ -61,6 +63,18 @@ bool near(Q16_16 value, double expected, double tolerance) {
 
 kin::State g_state;  // static: kinetics::State is a few KiB
 kin::Outputs g_out;
+
+/// Inits the estimator with `config` and advances the hand from 20 to 150 mm with 11 N of push.
+void advance_to_150_mm_at_11_N(const kin::Config& config) {
+    kin::init(config, g_state);
+    kin::Inputs in{};
+    in.handle_force_N = Q16_16::from_int(11);
+    in.fresh_mask = kin::kAllInputSignals;
+    for (int d = 20; d <= 150; ++d) {
+        in.insertion_mm = Q16_16::from_int(d);
+        kin::step(in, g_state, g_out);
+    }
+}
 
 }  // namespace
 
@@ -153,22 +167,79 @@ SCOPEKIN_TEST(SlackRegressor, ThePublishedTipIsTheDepthLessTheSlackWithinTheBoun
     static const SlackTrees trees = hand_built();
     kin::Config config = kin::default_config();
     config.slack_trees = &trees;
-    kin::init(config, g_state);
-    kin::Inputs in{};
-    in.handle_force_N = Q16_16::from_int(11);
-    in.fresh_mask = kin::kAllInputSignals;
-    for (int d = 20; d <= 150; ++d) {
-        in.insertion_mm = Q16_16::from_int(d);
-        kin::step(in, g_state, g_out);
-    }
+    config.contact_force_trees = nullptr;  // the default ones average over other time constants
+    config.loop_alarm_trees = nullptr;     // likewise
+    advance_to_150_mm_at_11_N(config);
     SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
     SCOPEKIN_EXPECT_EQ(g_out.tip_path_mm.raw(), 98 * kOne);
     SCOPEKIN_EXPECT_TRUE(near(g_out.tip_uncertainty_mm, 22.0, 0.01));
     config.slack_trees = nullptr;
-    kin::init(config, g_state);
-    for (int d = 20; d <= 150; ++d) {
-        in.insertion_mm = Q16_16::from_int(d);
-        kin::step(in, g_state, g_out);
-    }
+    advance_to_150_mm_at_11_N(config);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
     SCOPEKIN_EXPECT_EQ(g_out.tip_path_mm.raw(), g_out.observer_tip_path_mm.raw());
+}
+
+namespace {
+
+// The force trees: the hand-built splits with other leaves; base `base_N`, tree 0 -1 / +3 N,
+// tree 1 0 / +4 N.
+constexpr std::int32_t kForceLeaf[] = {-1 * kOne, 3 * kOne, 0, 4 * kOne};
+
+SlackTrees force_trees(int base_N) {
+    SlackTrees trees = hand_built();
+    trees.leaf_raw = kForceLeaf;
+    trees.base_raw = base_N * kOne;
+    return trees;
+}
+
+}  // namespace
+
+SCOPEKIN_TEST(ContactForceTrees, TheLargestForceIsTheTreesOutsideTheModelsTrust) {
+    // At 150 mm with 11 N of push: 2 + 3 + 4 = 9 N, SD 3 + 9 / 4 + 40 x 0.15 = 11.25 N; the
+    // model's own largest force stays in model_max_contact_force_N.
+    static const SlackTrees slack = hand_built();
+    static const SlackTrees force = force_trees(2);
+    kin::Config config = kin::default_config();
+    config.slack_trees = &slack;
+    config.contact_force_trees = &force;
+    config.loop_alarm_trees = nullptr;  // the default ones average over other time constants
+    advance_to_150_mm_at_11_N(config);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
+    SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
+    SCOPEKIN_EXPECT_EQ(g_out.max_contact_force_N.raw(), 9 * kOne);
+    SCOPEKIN_EXPECT_TRUE(near(g_out.max_contact_force_uncertainty_N, 11.25, 0.01));
+    SCOPEKIN_EXPECT_TRUE(!(g_out.model_max_contact_force_N < Q16_16{}));
+    // A contact force is never negative: base -20 N gives -13 N, published as 0 N.
+    static const SlackTrees pulling = force_trees(-20);
+    config.contact_force_trees = &pulling;
+    advance_to_150_mm_at_11_N(config);
+    SCOPEKIN_EXPECT_EQ(g_out.max_contact_force_N.raw(), 0);
+    // Without force trees the model's largest force is published.
+    config.contact_force_trees = nullptr;
+    advance_to_150_mm_at_11_N(config);
+    SCOPEKIN_EXPECT_EQ(g_out.max_contact_force_N.raw(), g_out.model_max_contact_force_N.raw());
+}
+
+SCOPEKIN_TEST(ContactForceTrees, TheyNeedSlackTreesOfTheSameAverages) {
+    SCOPEKIN_EXPECT_TRUE(kin::default_contact_force_trees().valid());
+    SCOPEKIN_EXPECT_TRUE(
+        kin::same_features(kin::default_slack_trees(), kin::default_contact_force_trees()));
+    static const SlackTrees slack = hand_built();
+    static const SlackTrees force = force_trees(2);
+    kin::Config config = kin::default_config();
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
+    config.loop_alarm_trees = nullptr;  // the default ones average over 1, 5, 20, 60 s
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
+    config.slack_trees = nullptr;
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::contact_force_regressor);
+    config.slack_trees = &kin::default_slack_trees();
+    config.contact_force_trees = &force;  // averages over 1, 1, 1, 20 s against 1, 5, 20, 60 s
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::contact_force_regressor);
+    config.slack_trees = &slack;
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
 }

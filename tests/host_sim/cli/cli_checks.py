@@ -464,6 +464,13 @@ def check_bom_and_long_lines():
     expect(len(p.stderr) < 400 and "(1048576 bytes)" in p.stderr, f"a long column name is bounded: {p.stderr[:300]}")
 
 
+# firmware.csv's columns after the stations, in order (host_sim/README.md, "firmware.csv").
+NEW_FIRMWARE_COLUMNS = ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
+                        "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm",
+                        "max_contact_force_uncertainty_N", "model_max_contact_force_N",
+                        "model_self_lock_alarm", "loop_score"]
+
+
 def check_box_faults():
     # The box's own faults and counters reach firmware.csv and summary.json: a candump log whose
     # handle force/torque frames skip one rolling counter value each (2,000 lost frames by the
@@ -556,9 +563,8 @@ def check_box_faults():
     sim_dir = os.path.dirname(rec)
     fw = rows(os.path.join(sim_dir, "firmware.csv"))
     header = open(os.path.join(sim_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-7:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
-                                "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm"],
-           f"the new columns come last: {header[-7:]}")
+    expect(header[-11:] == NEW_FIRMWARE_COLUMNS,
+           f"the new columns come last: {header[-11:]}")
     expect(header[:13] == ["time_s", "step_index", "tip_path_mm", "tip_velocity_mm_per_s", "advance_efficiency",
                            "active_stations", "max_contact_force_N", "max_contact_station", "max_contact_path_mm",
                            "distal_sticking", "self_lock_alarm", "contact_force_level", "fault_flags"],
@@ -569,9 +575,8 @@ def check_box_faults():
     run_dir = os.path.join(d, "run")
     run("run", rec, "--out", run_dir, "--quiet")
     header = open(os.path.join(run_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-7:] == ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
-                                "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm"],
-           f"run's firmware.csv ends with the new columns: {header[-7:]}")
+    expect(header[-11:] == NEW_FIRMWARE_COLUMNS,
+           f"run's firmware.csv ends with the new columns: {header[-11:]}")
     s = json.load(open(os.path.join(run_dir, "summary.json")))
     expect(s.get("box", {}).get("counters", {}).get("periods") == len(rows(os.path.join(run_dir, "firmware.csv"))),
            f"run's box section counts its periods: {str(s.get('box'))[:300]}")

@@ -4,6 +4,8 @@ four patients whose slack is a step function of the push force (40 mm above 10 N
 the observer's tip at the depth (its slack always 0). Leaving each patient out, the trees must
 learn the step (held-out tip error below a quarter of the observer's), the written source must hold
 100 trees of depth 4 (15 nodes, 16 leaves each) and the uncertainty law, and bad input must exit 2.
+With --target contact_force the truth's largest station force is a step in the push force too
+(12 N above 10 N of push, else 2 N) where the reduced model said 0 N: the trees must learn it.
 
 usage: check_fit_slack_regressor.py CHECK SOURCE_DIR WORK_DIR   (CHECK: synthetic | bad_input)"""
 import json
@@ -30,12 +32,15 @@ def write_case(root, name, seed):
     os.makedirs(folder)
     with open(os.path.join(folder, "summary.json"), "w") as f:
         json.dump({"status": "complete"}, f)
-    np.savetxt(os.path.join(folder, "truth.csv"), np.column_stack([t, depth - slack, np.zeros(n)]),
-               delimiter=",", header="time_s,tip_path_mm,scope_beyond_wall_mm", comments="", fmt="%.6f")
+    wall_force = np.where(force > 10, 12.0, 2.0)
+    np.savetxt(os.path.join(folder, "truth.csv"),
+               np.column_stack([t, depth - slack, np.zeros(n), wall_force]), delimiter=",",
+               header="time_s,tip_path_mm,scope_beyond_wall_mm,max_station_force_N", comments="", fmt="%.6f")
     np.savetxt(os.path.join(folder, "recording.csv"), np.column_stack([t - 0.001, force, depth]),
                delimiter=",", header="time_s,handle_force_N,insertion_mm", comments="", fmt="%.6f")
-    np.savetxt(os.path.join(folder, "firmware.csv"), np.column_stack([t, depth, depth]),
-               delimiter=",", header="time_s,tip_path_mm,observer_tip_path_mm", comments="", fmt="%.6f")
+    np.savetxt(os.path.join(folder, "firmware.csv"), np.column_stack([t, depth, depth, np.zeros(n)]),
+               delimiter=",", header="time_s,tip_path_mm,observer_tip_path_mm,max_contact_force_N",
+               comments="", fmt="%.6f")
 
 
 def fit(*args):
@@ -73,8 +78,17 @@ if CHECK == "synthetic":
     expect(counts == {"kFeature": 1500, "kThresholdRaw": 1500, "kLeafRaw": 1600},
            f"100 complete trees of depth 4: {counts}")
     expect("default_slack_trees()" in text and "100U, 4U" in text, "the source defines default_slack_trees()")
-    expect(r["firmware_vs_sklearn_max_abs_mm"] < 1.0,
-           f"the firmware's integer evaluation matches the learner's: {r['firmware_vs_sklearn_max_abs_mm']}")
+    expect(r["firmware_vs_sklearn_max_abs"] < 1e-3,
+           f"the firmware's integer evaluation matches the learner's: {r['firmware_vs_sklearn_max_abs']}")
+    force_out, force_report = os.path.join(WORK, "force_trees.cpp"), os.path.join(WORK, "force_fit.json")
+    p = fit(WORK, "--target", "contact_force", "--out", force_out, "--report", force_report)
+    expect(p.returncode == 0, f"the force fit exits 0 (got {p.returncode}: {p.stderr[-500:]})")
+    held = json.load(open(force_report))["held_out_force_rms_N"]
+    expect(held["model"]["median"] > 5, f"the model's 0 N misses the wall force: {held['model']}")
+    expect(held["regressor"]["median"] < 0.25 * held["model"]["median"],
+           f"the force trees learn the step on held-out patients: {held['regressor']} vs {held['model']}")
+    expect("default_contact_force_trees()" in open(force_out).read(),
+           "the source defines default_contact_force_trees()")
 elif CHECK == "bad_input":
     p = fit(os.path.join(WORK, "missing"), "--out", os.path.join(WORK, "x.cpp"))
     expect(p.returncode == 2 and "complete cases" in p.stderr, f"no evaluation: exit 2 ({p.returncode}, {p.stderr.strip()})")
