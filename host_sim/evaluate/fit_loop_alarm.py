@@ -21,7 +21,6 @@ level's held-out detections and false alarms beside the reduced model's self-loc
 same cases. Needs Debian's python3-sklearn and python3-numpy.
 """
 import argparse
-import glob
 import json
 import os
 import sys
@@ -124,12 +123,7 @@ def main():
     ap.add_argument("--out", required=True, help="the C++ source to write")
     ap.add_argument("--report", help="JSON: held-out detections and false alarms per raise level")
     a = ap.parse_args()
-    cases = []
-    for f in sorted(glob.glob(os.path.join(a.eval_dir, "cases", "*", "summary.json"))):
-        c = load(os.path.dirname(f))
-        print(f"fit: {'read' if c else 'skipped (not complete)'} {os.path.dirname(f)}", file=sys.stderr)
-        if c:
-            cases.append(c)
+    cases = features.read_cases(a.eval_dir, load)
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
     if len(patients) < 2 or sum(len(c["episodes"]) for c in cases) == 0:

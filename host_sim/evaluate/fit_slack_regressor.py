@@ -162,6 +162,18 @@ TARGETS = {
 }
 
 
+def read_cases(eval_dir, load=None):
+    """Every complete case of an evaluation, read by `load` (default load_case), with progress."""
+    load = load or load_case
+    cases = []
+    for f in sorted(glob.glob(os.path.join(eval_dir, "cases", "*", "summary.json"))):
+        c = load(os.path.dirname(f))
+        print(f"fit: {'read' if c else 'skipped (not complete)'} {os.path.dirname(f)}", file=sys.stderr)
+        if c:
+            cases.append(c)
+    return cases
+
+
 def baseline(c, target):
     """What the box published before the fit: the observer's slack, the reduced model's force."""
     return c["X"][:, 5] if target == "slack" else c["model_force_N"]
@@ -177,12 +189,7 @@ def main():
                     help="slack: depth - tip [mm] (default); contact_force: the largest station force [N]")
     a = ap.parse_args()
     spec = TARGETS[a.target]
-    cases = []
-    for f in sorted(glob.glob(os.path.join(a.eval_dir, "cases", "*", "summary.json"))):
-        c = load_case(os.path.dirname(f))
-        print(f"fit: {'read' if c else 'skipped (not complete)'} {os.path.dirname(f)}", file=sys.stderr)
-        if c:
-            cases.append(c)
+    cases = read_cases(a.eval_dir)
     if len(cases) < 4:
         print(f"fit_slack_regressor.py: {a.eval_dir}: {len(cases)} complete cases (cases/*/summary.json "
               "with status complete), need at least 4", file=sys.stderr)
