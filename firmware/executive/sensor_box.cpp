@@ -200,6 +200,17 @@ void SensorBox::publish_outputs() {
     alarms.step_counter = step_counter;
     publish(protocol::encode(alarms));
 
+    protocol::EstimateEvidence evidence{};
+    if (estimator_ok_) {
+        evidence.max_contact_force_uncertainty_N = outputs_.max_contact_force_uncertainty_N;
+        evidence.loop_score = outputs_.loop_score;
+        evidence.model_log_likelihood_ratio = outputs_.model_log_likelihood_ratio;
+        evidence.model_self_lock = outputs_.model_self_lock_alarm;
+        evidence.tip_from_tracker = outputs_.tip_from_tracker;
+    }
+    evidence.step_counter = step_counter;
+    publish(protocol::encode(evidence));
+
     if (estimator_ok_ && outputs_.active_stations > 0U) {
         if (station_cursor_ >= outputs_.active_stations ||
             station_cursor_ >= kinetics::kStationCapacity) {

@@ -8,8 +8,8 @@
 //   step     kinetics::step on the Inputs assembled from the drivers' messages
 //            (estimator_inputs.hpp; the estimator validates them again and holds stale signals)
 //   monitor  the estimator's monitors (self-lock, contact force) run inside step
-//   publish  KineticEstimate, ContactSummary, Alarms, one StationForces and one BoxCounters frame
-//            every period; BoxStatus every `status_every_periods` and at once in any period whose
+//   publish  KineticEstimate, ContactSummary, Alarms, EstimateEvidence, one StationForces and one
+//            BoxCounters frame every period; BoxStatus every `status_every_periods` and at once in any period whose
 //            fault bits differ from the last BoxStatus sent
 //
 // It uses only the HAL interfaces (hal::CanBus, hal::SerialPort); `main` picks the backends and

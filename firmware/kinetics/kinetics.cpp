@@ -62,6 +62,7 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
          !same_features(*config.slack_trees, *config.loop_alarm_trees))) {
         return ConfigFault::loop_alarm;
     }
+    if (!config.tip_odometer.valid(config.period_s)) return ConfigFault::tip_odometer;
     return ConfigFault::none;
 }
 
@@ -252,8 +253,25 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         }
     }
 
+    // The bench's EM tracker, when connected: the tip's odometry fused with the handle's tip.
+    TipOdometer::Inputs odometer_inputs{};
+    odometer_inputs.tracker = &inputs.tracker;
+    odometer_inputs.handle_tip_mm = observed.tip_mm;
+    odometer_inputs.handle_sd_mm = observed.uncertainty_mm;
+    odometer_inputs.handle_trusted = evidence.trusted;
+    odometer_inputs.tip_min_mm =
+        TipObserver::bounded(config.tip_observer, state.insertion_mm, Q16_16::min());
+    odometer_inputs.tip_max_mm =
+        TipObserver::bounded(config.tip_observer, state.insertion_mm, Q16_16::max());
+    odometer_inputs.period_s = config.period_s;
+    const TipOdometer::Outputs odometer =
+        TipOdometer::step(config.tip_odometer, odometer_inputs, state.tip_odometer);
+    observed.tip_mm = odometer.tip_mm;
+    observed.uncertainty_mm = odometer.uncertainty_mm;
+
     // 4. Outputs.
     outputs.tip_path_mm = observed.tip_mm;
+    outputs.tip_from_tracker = odometer.active;
     outputs.tip_uncertainty_mm = observed.uncertainty_mm;
     outputs.tip_velocity_mm_per_s = tip_velocity(state, observed.tip_mm, faults);
     outputs.model_tip_path_mm = model.tip_path_mm;

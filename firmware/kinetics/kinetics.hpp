@@ -17,6 +17,9 @@
 //      needed; while it does, the model's tip is published and the observer continues from it.
 //      The slack regressor (slack_regressor.hpp): depth - tip regressed on the handle's history,
 //      the observer's slack among its inputs, by trees fitted on a population of patients.
+//      The tip odometer (tip_odometer.hpp): only while the test bench's EM tracker is connected,
+//      the tip sensor's travel along the scope's axis, fused with the handle's tip above by a
+//      scalar Kalman filter; without tracker samples the handle's tip is published unchanged.
 //   4. Outputs: the published tip (the model's while trusted, else the regressor's, else the
 //      observer's when no trees are configured), its
 //      uncertainty and its velocity (mean over the last
@@ -57,6 +60,7 @@
 #include "kinetics/reduced_tables.hpp"
 #include "kinetics/slack_regressor.hpp"
 #include "kinetics/tip_observer.hpp"
+#include "kinetics/tip_odometer.hpp"
 #include "monitors/advance_efficiency.hpp"
 #include "monitors/contact_force_monitor.hpp"
 #include "monitors/self_lock_monitor.hpp"
@@ -113,6 +117,9 @@ struct Config {
     /// reduced model's self-lock monitor alone (as before). Needs slack_trees, same averages.
     const SlackTrees* loop_alarm_trees{nullptr};
     EvidenceAlarm::Config loop_alarm{};
+    /// The bench's EM tracker's tip, fused with the handle's tip when it is connected
+    /// (tip_odometer.hpp); without tracker samples it changes nothing.
+    TipOdometer::Config tip_odometer{};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
@@ -128,6 +135,7 @@ enum class ConfigFault : std::uint8_t {
     slack_regressor,          ///< the slack regressor's trees are not valid()
     contact_force_regressor,  ///< the force trees not valid(), or without matching slack trees
     loop_alarm,               ///< the loop alarm's trees or settings not valid(), or no slack trees
+    tip_odometer,             ///< the tip odometer's settings not valid() at this period
 };
 
 /// All mutable data of the estimator (Drake-style context).  Sized at compile time.
@@ -153,6 +161,7 @@ struct State {
     ModelEvidence::State model_evidence{};
     SlackRegressor::State slack{};
     EvidenceAlarm::State loop_alarm{};
+    TipOdometer::State tip_odometer{};
 };
 
 void init(const Config& config, State& state) noexcept;

@@ -101,7 +101,8 @@ struct Outputs {
     std::uint32_t step_index{0};
     /// Tip position along the colon centerline: the reduced model's while the handle's evidence
     /// trusts it (tip_from_model), else depth - the slack regressor's slack (slack_regressor.hpp),
-    /// or the tip observer's when no regressor is configured.
+    /// or the tip observer's when no regressor is configured; that, fused with the bench's EM
+    /// tracker's tip odometry while the tracker is connected (tip_from_tracker, tip_odometer.hpp).
     Q16_16 tip_path_mm{};
     Q16_16 tip_uncertainty_mm{};     ///< one standard deviation of tip_path_mm
     Q16_16 tip_velocity_mm_per_s{};  ///< d/dt of tip_path_mm
@@ -109,6 +110,7 @@ struct Outputs {
     /// The handle's evidence that this patient is the model's training patient (model_evidence.hpp)
     Q16_16 model_log_likelihood_ratio{};
     bool tip_from_model{false};     ///< the published tip is the model's (the evidence trusts it)
+    bool tip_from_tracker{false};   ///< ... fused with the bench's EM tracker (tip_odometer.hpp)
     Q16_16 observer_tip_path_mm{};  ///< the tip observer's own tip (an input of the regressor)
     Q16_16 advance_efficiency{};    ///< tip advance / handle advance over the window (0..1+)
     std::array<StationEstimate, kStationCapacity> stations{};

@@ -51,7 +51,8 @@ private:
 
 bool compared_output(std::uint32_t id) {
     return id == protocol::kKineticEstimateId || id == protocol::kContactSummaryId ||
-           id == protocol::kAlarmsId || id == protocol::kStationForcesId;
+           id == protocol::kAlarmsId || id == protocol::kEstimateEvidenceId ||
+           id == protocol::kStationForcesId;
 }
 
 /// A candump time stamp as the log writes it: seconds.microseconds.
@@ -88,7 +89,8 @@ std::string frame_text(const hal::CanFrame& f) {
 bool is_box_output_id(std::uint32_t id) {
     return id == protocol::kBoxStatusId || id == protocol::kKineticEstimateId ||
            id == protocol::kContactSummaryId || id == protocol::kAlarmsId ||
-           id == protocol::kBoxCountersId || id == protocol::kStationForcesId;
+           id == protocol::kBoxCountersId || id == protocol::kEstimateEvidenceId ||
+           id == protocol::kStationForcesId;
 }
 
 /// A frame the box receives (anything but the box's own outputs).
@@ -194,32 +196,39 @@ ReplayResult replay_candump(const CandumpLog& log,
                 continue;
             }
             run(r.timestamp_us);
-            // Compare this period's recorded outputs (up to the next input line or next period).
-            std::size_t sent_index = 0;
+            // Compare this period's recorded outputs (up to the next input line or next period)
+            // with the replayed frames of the same identifier, in order: a log of an older
+            // protocol without some message (1.2 had no EstimateEvidence) still compares.
             std::vector<hal::CanFrame> replayed;
             for (const hal::CanFrame& f : bus->sent)
                 if (compared_output(f.id)) replayed.push_back(f);
+            std::vector<bool> used(replayed.size(), false);
             std::size_t j = i;
             for (; j < n && !is_input(log.records[j]); ++j) {
                 const hal::CanFrame& recorded = log.records[j].frame;
                 if (j > i && recorded.id == protocol::kKineticEstimateId) break;
                 if (!compared_output(recorded.id)) continue;
                 ++result.compared_frames;
+                std::size_t match = replayed.size();
+                for (std::size_t k = 0; k < replayed.size(); ++k) {
+                    if (!used[k] && replayed[k].id == recorded.id) {
+                        match = k;
+                        break;
+                    }
+                }
+                if (match < replayed.size()) used[match] = true;
                 const bool same =
-                    sent_index < replayed.size() && replayed[sent_index].id == recorded.id &&
-                    replayed[sent_index].length == recorded.length &&
+                    match < replayed.size() && replayed[match].length == recorded.length &&
                     std::equal(recorded.data.begin(), recorded.data.begin() + recorded.length,
-                               replayed[sent_index].data.begin());
+                               replayed[match].data.begin());
                 if (!same) {
                     ++result.differing_frames;
                     if (result.first_difference.empty())
                         result.first_difference =
                             "line " + std::to_string(log.lines[j]) + ": recorded " +
                             frame_text(recorded) + ", replayed " +
-                            (sent_index < replayed.size() ? frame_text(replayed[sent_index])
-                                                          : "nothing");
+                            (match < replayed.size() ? frame_text(replayed[match]) : "nothing");
                 }
-                ++sent_index;
             }
             i = j;
         }

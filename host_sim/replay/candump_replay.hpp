@@ -6,7 +6,7 @@
 //    the frames it sent, which carry the period's release time (hal/linux/recording_can_bus.hpp).
 //    The replay gives the box the same frames with the same timestamps and runs each period at
 //    the recorded time, then compares what the box sends with what was recorded (KineticEstimate,
-//    ContactSummary, Alarms, StationForces; BoxStatus and BoxCounters carry the live box's
+//    ContactSummary, Alarms, EstimateEvidence, StationForces; BoxStatus and BoxCounters carry the live box's
 //    overrun and bus counters, which a replay cannot have).
 //  * a sensor log (no 0x181): the handle sensors' frames only; the box runs every 5 ms from the
 //    first frame's time, each period after the frames stamped at or before it.

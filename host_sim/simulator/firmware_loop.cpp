@@ -54,6 +54,7 @@ void FirmwareLoop::run_period(std::uint64_t time_us) {
             case protocol::kAlarmsId: ++published_.alarms; break;
             case protocol::kStationForcesId: ++published_.stations; break;
             case protocol::kBoxCountersId: ++published_.counters; break;
+            case protocol::kEstimateEvidenceId: ++published_.evidence; break;
             case protocol::kBoxStatusId: ++published_.status; break;
             default: ++published_.other; break;
         }

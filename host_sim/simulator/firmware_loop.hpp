@@ -38,8 +38,8 @@ struct BoxPeriod {
 
 /// Frames the box published, by message (drained from the wire every period).
 struct PublishedFrames {
-    std::uint64_t estimates = 0, summaries = 0, alarms = 0, stations = 0, counters = 0, status = 0,
-                  other = 0;
+    std::uint64_t estimates = 0, summaries = 0, alarms = 0, evidence = 0, stations = 0,
+                  counters = 0, status = 0, other = 0;
 };
 
 class FirmwareLoop {

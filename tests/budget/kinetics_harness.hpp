@@ -98,13 +98,14 @@ constexpr std::size_t aggregate_field_count() noexcept {
 
 }  // namespace detail
 
-static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 22U,
+static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 23U,
               "kinetics::Outputs changed: hash every field in hash_outputs(), then update this "
               "count and regenerate the golden hashes (tests/firmware/data/README.md)");
 static_assert(detail::aggregate_field_count<kinetics::StationEstimate>() == 5U,
               "kinetics::StationEstimate changed: hash every field in hash_outputs()");
-// Inputs::tracker (the test bench's EM tracker and tip force) stays zero in every scenario: the
-// estimator does not read it yet.  The one that does extends ScenarioStep with it.
+// Inputs::tracker (the test bench's EM tracker and tip force) stays zero in every scenario: these
+// are the box as used in a patient, without the bench's tracker. The tip odometer that reads it
+// (tip_odometer.hpp) is checked value by value on every ISA by test_tip_odometer.cpp.
 static_assert(
     detail::aggregate_field_count<kinetics::Inputs>() == 6U,
     "kinetics::Inputs changed: extend ScenarioStep (scenario_format.hpp) and to_inputs()");
@@ -118,6 +119,7 @@ constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noe
     hash.q16(outputs.model_tip_path_mm);
     hash.q16(outputs.model_log_likelihood_ratio);
     hash.boolean(outputs.tip_from_model);
+    hash.boolean(outputs.tip_from_tracker);
     hash.q16(outputs.observer_tip_path_mm);
     hash.q16(outputs.advance_efficiency);
     for (const kinetics::StationEstimate& station : outputs.stations) {  // bound: kStationCapacity

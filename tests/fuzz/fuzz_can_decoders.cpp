@@ -2,7 +2,7 @@
 // (firmware/protocol/can/scopekin_messages.hpp) on any frame a bus or a backend could hand over.
 //
 // Input layout (the seed corpus, tests/fuzz/corpus/can_decoders/, is written by make_corpus.py):
-//   byte 0   identifier selector: 0x00..0xBF -> the protocol's ids (selector % 8, in the order of
+//   byte 0   identifier selector: 0x00..0xBF -> the protocol's ids (selector % 9, in the order of
 //            message_layouts()); 0xC0..0xFF -> the next 4 bytes, little-endian, masked to 11 bits
 //            (or 29 with the extended flag) — any other id, the error-class bits of error frames
 //   byte 1   bits 0..3: length 0..15 (a length beyond 8 is passed through: the decoders must
@@ -72,6 +72,13 @@ bool same(const protocol::Alarms& a, const protocol::Alarms& b) {
 }
 bool same(const protocol::BoxCounter& a, const protocol::BoxCounter& b) {
     return a.index == b.index && a.value == b.value;
+}
+bool same(const protocol::EstimateEvidence& a, const protocol::EstimateEvidence& b) {
+    return a.max_contact_force_uncertainty_N == b.max_contact_force_uncertainty_N &&
+           a.loop_score == b.loop_score &&
+           a.model_log_likelihood_ratio == b.model_log_likelihood_ratio &&
+           a.model_self_lock == b.model_self_lock && a.tip_from_tracker == b.tip_from_tracker &&
+           a.step_counter == b.step_counter;
 }
 bool same(const protocol::StationForces& a, const protocol::StationForces& b) {
     return a.station == b.station && a.state == b.state && a.normal_force_N == b.normal_force_N &&
@@ -151,7 +158,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const std::span<const std::uint8_t> input{data, size};
     const auto layouts = protocol::message_layouts();
-    require(layouts.size() == 8U);
+    require(layouts.size() == 9U);
 
     CanFrame frame{};
     const std::uint8_t selector = input[0];
@@ -182,6 +189,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check<protocol::ContactSummary>(frame, protocol::kContactSummaryId);
     check<protocol::Alarms>(frame, protocol::kAlarmsId);
     check<protocol::BoxCounter>(frame, protocol::kBoxCountersId);
+    check<protocol::EstimateEvidence>(frame, protocol::kEstimateEvidenceId);
     check<protocol::StationForces>(frame, protocol::kStationForcesId);
     return 0;
 }

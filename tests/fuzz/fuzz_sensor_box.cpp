@@ -153,6 +153,13 @@ std::uint32_t check_sent_frames(Bench& bench, bool& estimate_seen, bool& status_
                 require(protocol::decode(frame, counter) == protocol::DecodeResult::ok);
                 break;
             }
+            case protocol::kEstimateEvidenceId: {
+                protocol::EstimateEvidence evidence{};
+                require(protocol::decode(frame, evidence) == protocol::DecodeResult::ok);
+                require(evidence.step_counter ==
+                        static_cast<std::uint8_t>(box.outputs().step_index & 0xFFU));
+                break;
+            }
             case protocol::kStationForcesId: {
                 protocol::StationForces forces{};
                 require(protocol::decode(frame, forces) == protocol::DecodeResult::ok);

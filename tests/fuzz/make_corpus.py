@@ -612,7 +612,7 @@ def write(target, seeds):
 
 def main():
     messages = read_dbc(DBC)
-    assert len(messages) == 8, "scopekin.dbc: expected 8 messages"
+    assert len(messages) == 9, "scopekin.dbc: expected 9 messages"
     write("can_decoders", can_decoder_seeds(messages, random.Random("scopekin-fuzz-can")))
     write("candump_parser", candump_seeds(messages, random.Random("scopekin-fuzz-candump")))
     write("em_tracker_driver", em_driver_seeds(random.Random("scopekin-fuzz-em-driver")))

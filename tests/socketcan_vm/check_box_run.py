@@ -14,8 +14,8 @@ At any speed:
   with kBoxFaultReceiveDropped (DriverFaults bit 9) and each overrun with kBoxFaultPeriodOverrun
   (bit 13); the bits reach the bus in a BoxStatus, the counts in BoxCounters; after the last drop
   the bit clears (the box recovers);
-* the protocol: a KineticEstimate, ContactSummary, Alarms and BoxCounters frame per period, a
-  valid estimate that follows the advance;
+* the protocol: a KineticEstimate, ContactSummary, Alarms, EstimateEvidence and BoxCounters frame
+  per period, a valid estimate that follows the advance;
 * the force cell's 0.3 s silence (found by frame count: a starved canplayer leaves other pauses,
   counted): the stale bit in a BoxStatus, InputsStale on the estimate, and the bits cleared after
   the cell's return; within 3 periods each (counted in KineticEstimate frames, i.e. box periods,
@@ -49,7 +49,7 @@ import canmatrix.formats
 from box_logs import (
     COUNTER_INDEX, COUNTERS_ID, DRIVER_FORCE_STALE, DRIVER_PERIOD_OVERRUN, DRIVER_RECEIVE_DROPPED,
     ENCODER_ID, ESTIMATE_ID, FORCE_ID, KINETIC_FORCE_STALE, KINETIC_TORQUE_STALE, STATION_ID,
-    STATUS_ID, SUMMARY_ID, ALARMS_ID, TRACKER_STALE, FaultLog, check_flags_account, decode_box_frames,
+    STATUS_ID, SUMMARY_ID, ALARMS_ID, EVIDENCE_ID, TRACKER_STALE, FaultLog, check_flags_account, decode_box_frames,
     longest_lag_periods, read_candump, read_marks)
 
 PERIOD_US = 5000
@@ -137,7 +137,8 @@ def main():
     estimates = [d for d in decoded if d[1] == ESTIMATE_ID]
     periods = stats["periods"]
     for ident, name in ((ESTIMATE_ID, "KineticEstimate"), (SUMMARY_ID, "ContactSummary"),
-                        (ALARMS_ID, "Alarms"), (COUNTERS_ID, "BoxCounters")):
+                        (ALARMS_ID, "Alarms"), (EVIDENCE_ID, "EstimateEvidence"),
+                        (COUNTERS_ID, "BoxCounters")):
         count = sum(1 for d in decoded if d[1] == ident)
         expect(count == periods, f"{count} {name} frames for {periods} periods")
     expect(all(d[2]["EstimateValid"] == 1 for d in estimates), "every estimate valid")

@@ -84,6 +84,18 @@ constexpr std::array kSignals{kIndex, kValue};
 constexpr std::uint8_t kLength = 8;
 }  // namespace box_counters
 
+namespace estimate_evidence {
+constexpr CanSignal kForceUncertainty{"MaxContactForceUncertainty", 0, 16, false, 1, 1000};
+constexpr CanSignal kLoopScore{"LoopScore", 16, 16, false, 1, 10000};
+constexpr CanSignal kLogRatio{"ModelLogLikelihoodRatio", 32, 16, true, 1, 100};
+constexpr CanSignal kModelSelfLock{"ModelSelfLockAlarm", 48, 1, false, 1, 1};
+constexpr CanSignal kTipFromTracker{"TipFromTracker", 49, 1, false, 1, 1};
+constexpr CanSignal kStep{"StepCounter", 56, 8, false, 1, 1};
+constexpr std::array kSignals{kForceUncertainty, kLoopScore,      kLogRatio,
+                              kModelSelfLock,    kTipFromTracker, kStep};
+constexpr std::uint8_t kLength = 8;
+}  // namespace estimate_evidence
+
 namespace station_forces {
 constexpr CanSignal kStation{"StationIndex", 0, 4, false, 1, 1};
 constexpr CanSignal kState{"StationState", 4, 2, false, 1, 1};
@@ -107,6 +119,8 @@ constexpr std::array kLayouts{
                   contact_summary::kSignals},
     MessageLayout{"Alarms", kAlarmsId, alarms::kLength, alarms::kSignals},
     MessageLayout{"BoxCounters", kBoxCountersId, box_counters::kLength, box_counters::kSignals},
+    MessageLayout{"EstimateEvidence", kEstimateEvidenceId, estimate_evidence::kLength,
+                  estimate_evidence::kSignals},
     MessageLayout{"StationForces", kStationForcesId, station_forces::kLength,
                   station_forces::kSignals},
 };
@@ -157,7 +171,7 @@ std::span<const MessageLayout> message_layouts() {
 }
 
 const MessageLayout* find_message_layout(std::uint32_t id) {
-    for (const MessageLayout& layout : kLayouts) {  // bound: 8 messages
+    for (const MessageLayout& layout : kLayouts) {  // bound: 9 messages
         if (layout.id == id) {
             return &layout;
         }
@@ -392,6 +406,40 @@ DecodeResult decode(const hal::CanFrame& frame, BoxCounter& message) {
     }
     message.index = static_cast<BoxCounterIndex>(index);
     message.value = get_unsigned<std::uint32_t>(frame, kValue);
+    return DecodeResult::ok;
+}
+
+// ---- EstimateEvidence -------------------------------------------------------------------------
+hal::CanFrame encode(const EstimateEvidence& message) {
+    using namespace estimate_evidence;
+    hal::CanFrame frame = start_frame(kEstimateEvidenceId, kLength);
+    put_q16(frame, kForceUncertainty, message.max_contact_force_uncertainty_N);
+    put_q16(frame, kLoopScore, message.loop_score);
+    put_q16(frame, kLogRatio, message.model_log_likelihood_ratio);
+    put_integer(frame, kModelSelfLock, message.model_self_lock ? 1 : 0);
+    put_integer(frame, kTipFromTracker, message.tip_from_tracker ? 1 : 0);
+    put_integer(frame, kStep, message.step_counter);
+    return frame;
+}
+
+DecodeResult decode(const hal::CanFrame& frame, EstimateEvidence& message) {
+    using namespace estimate_evidence;
+    const DecodeResult check = check_frame(frame, kEstimateEvidenceId, kLength);
+    if (check != DecodeResult::ok) {
+        return check;
+    }
+    bool saturated = false;
+    EstimateEvidence decoded{};
+    decoded.max_contact_force_uncertainty_N = get_q16(frame, kForceUncertainty, saturated);
+    decoded.loop_score = get_q16(frame, kLoopScore, saturated);
+    decoded.model_log_likelihood_ratio = get_q16(frame, kLogRatio, saturated);
+    decoded.model_self_lock = get_flag(frame, kModelSelfLock);
+    decoded.tip_from_tracker = get_flag(frame, kTipFromTracker);
+    decoded.step_counter = get_unsigned<std::uint8_t>(frame, kStep);
+    if (saturated) {
+        return DecodeResult::out_of_range;
+    }
+    message = decoded;
     return DecodeResult::ok;
 }
 

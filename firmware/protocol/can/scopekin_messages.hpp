@@ -34,6 +34,7 @@ inline constexpr std::uint32_t kKineticEstimateId = 0x181;
 inline constexpr std::uint32_t kContactSummaryId = 0x182;
 inline constexpr std::uint32_t kAlarmsId = 0x183;
 inline constexpr std::uint32_t kBoxCountersId = 0x184;
+inline constexpr std::uint32_t kEstimateEvidenceId = 0x185;
 inline constexpr std::uint32_t kStationForcesId = 0x190;
 
 // ---- inputs: handle sensors -------------------------------------------------------------------
@@ -141,6 +142,16 @@ struct BoxCounter {
     std::uint32_t value{0};
 };
 
+/// 0x185: every period (1.3): how sure the estimate is and what the reduced model says.
+struct EstimateEvidence {
+    Q16_16 max_contact_force_uncertainty_N{};  ///< 0.001 N, 0..65.535 N: one SD of MaxContactForce
+    Q16_16 loop_score{};                       ///< 0.0001, 0..6.5535 (the score is 0..1)
+    Q16_16 model_log_likelihood_ratio{};       ///< 0.01, ±327.68 (the estimator's is in ±20)
+    bool model_self_lock{false};               ///< the reduced model's self-lock monitor
+    bool tip_from_tracker{false};              ///< the bench's EM tracker is fused into the tip
+    std::uint8_t step_counter{0};
+};
+
 /// 0x190: one contact station per period, round robin over the active stations.
 struct StationForces {
     std::uint8_t station{0};      ///< 0..15 (0 = tip)
@@ -182,6 +193,7 @@ enum class DecodeResult : std::uint8_t {
 [[nodiscard]] hal::CanFrame encode(const ContactSummary& message);
 [[nodiscard]] hal::CanFrame encode(const Alarms& message);
 [[nodiscard]] hal::CanFrame encode(const BoxCounter& message);
+[[nodiscard]] hal::CanFrame encode(const EstimateEvidence& message);
 [[nodiscard]] hal::CanFrame encode(const StationForces& message);
 
 [[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, HandleForceTorque& message);
@@ -191,6 +203,7 @@ enum class DecodeResult : std::uint8_t {
 [[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, ContactSummary& message);
 [[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, Alarms& message);
 [[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, BoxCounter& message);
+[[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, EstimateEvidence& message);
 [[nodiscard]] DecodeResult decode(const hal::CanFrame& frame, StationForces& message);
 
 }  // namespace scopekin::protocol

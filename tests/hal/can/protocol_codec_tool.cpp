@@ -116,6 +116,16 @@ void bind(Visitor& v, BoxCounter& m) {
 }
 
 template <typename Visitor>
+void bind(Visitor& v, EstimateEvidence& m) {
+    v.q16("MaxContactForceUncertainty", m.max_contact_force_uncertainty_N);
+    v.q16("LoopScore", m.loop_score);
+    v.q16("ModelLogLikelihoodRatio", m.model_log_likelihood_ratio);
+    v.flag("ModelSelfLockAlarm", m.model_self_lock);
+    v.flag("TipFromTracker", m.tip_from_tracker);
+    v.integer("StepCounter", m.step_counter);
+}
+
+template <typename Visitor>
 void bind(Visitor& v, StationForces& m) {
     v.integer("StationIndex", m.station);
     v.integer("StationState", m.state);
@@ -370,6 +380,7 @@ const Entry kEntries[] = {
     entry<ContactSummary>("ContactSummary", kContactSummaryId),
     entry<Alarms>("Alarms", kAlarmsId),
     entry<BoxCounter>("BoxCounters", kBoxCountersId),
+    entry<EstimateEvidence>("EstimateEvidence", kEstimateEvidenceId),
     entry<StationForces>("StationForces", kStationForcesId),
 };
 

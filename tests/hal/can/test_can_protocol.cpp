@@ -107,6 +107,36 @@ SCOPEKIN_TEST(CanProtocol, AlarmsBytesByHand) {
     SCOPEKIN_EXPECT_TRUE(decoded.tip_from_model);
 }
 
+// EstimateEvidence (1.3): MaxContactForceUncertainty 2.5 N -> 2500 = 0x09C4; LoopScore 0.8 ->
+// 8000 = 0x1F40; ModelLogLikelihoodRatio -7.5 -> -750 = 0xFD12; ModelSelfLockAlarm 1 (bit 48),
+// TipFromTracker 1 (bit 49): byte 6 = 0x03; StepCounter 0x5C. Decoding gives the same Q16.16 values back (each a whole number of steps).
+SCOPEKIN_TEST(CanProtocol, EstimateEvidenceBytesByHand) {
+    protocol::EstimateEvidence message{};
+    message.max_contact_force_uncertainty_N = Q16_16::from_ratio(5, 2);
+    message.loop_score = Q16_16::from_ratio(4, 5);
+    message.model_log_likelihood_ratio = Q16_16::from_ratio(-15, 2);
+    message.model_self_lock = true;
+    message.tip_from_tracker = true;
+    message.step_counter = 0x5C;
+    const CanFrame frame = protocol::encode(message);
+    SCOPEKIN_EXPECT_EQ(frame.id, 0x185U);
+    SCOPEKIN_EXPECT_TRUE(bytes_are(frame, {0xC4, 0x09, 0x40, 0x1F, 0x12, 0xFD, 0x03, 0x5C}));
+    protocol::EstimateEvidence decoded{};
+    SCOPEKIN_EXPECT_TRUE(protocol::decode(frame, decoded) == protocol::DecodeResult::ok);
+    SCOPEKIN_EXPECT_EQ(decoded.max_contact_force_uncertainty_N.raw(),
+                       message.max_contact_force_uncertainty_N.raw());
+    SCOPEKIN_EXPECT_EQ(decoded.loop_score.raw(), message.loop_score.raw());
+    SCOPEKIN_EXPECT_EQ(decoded.model_log_likelihood_ratio.raw(),
+                       message.model_log_likelihood_ratio.raw());
+    SCOPEKIN_EXPECT_TRUE(decoded.model_self_lock);
+    SCOPEKIN_EXPECT_TRUE(decoded.tip_from_tracker);
+    SCOPEKIN_EXPECT_EQ(decoded.step_counter, 0x5C);
+    // A force SD beyond the signal saturates at 65.535 N (0xFFFF).
+    message.max_contact_force_uncertainty_N = Q16_16::from_int(100);
+    SCOPEKIN_EXPECT_TRUE(
+        bytes_are(protocol::encode(message), {0xFF, 0xFF, 0x40, 0x1F, 0x12, 0xFD, 0x03, 0x5C}));
+}
+
 SCOPEKIN_TEST(CanProtocol, EveryMessageRoundTrips) {
     protocol::BoxStatus status{};
     status.heartbeat = 200;
@@ -245,7 +275,7 @@ SCOPEKIN_TEST(CanProtocol, EncodingSaturatesToTheSignalRange) {
 
 SCOPEKIN_TEST(CanProtocol, LayoutsCoverEveryMessageOnce) {
     const auto layouts = protocol::message_layouts();
-    SCOPEKIN_EXPECT_EQ(layouts.size(), 8U);
+    SCOPEKIN_EXPECT_EQ(layouts.size(), 9U);
     for (const auto& layout : layouts) {
         SCOPEKIN_EXPECT_TRUE(protocol::find_message_layout(layout.id) == &layout);
         for (const auto& signal : layout.signals) {

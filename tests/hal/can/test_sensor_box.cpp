@@ -31,6 +31,12 @@ namespace messages = scopekin::messages;
 
 constexpr std::uint64_t kPeriodUs = 5000;
 
+/// |a - b| <= tolerance, in Q16.16 raw units.
+bool within_raw(Q16_16 a, Q16_16 b, std::int64_t tolerance) {
+    const std::int64_t d = std::int64_t{a.raw()} - b.raw();
+    return d <= tolerance && -d <= tolerance;
+}
+
 /// What the world saw the box publish in one period.
 struct Published {
     int estimates{0};
@@ -39,9 +45,11 @@ struct Published {
     int statuses{0};
     int counters{0};
     int stations{0};
+    int evidences{0};
     int other{0};
     protocol::KineticEstimate estimate{};
     protocol::Alarms alarm{};
+    protocol::EstimateEvidence evidence{};
     protocol::BoxStatus status{};
 };
 
@@ -130,6 +138,11 @@ struct Bench {
                     break;
                 case protocol::kBoxCountersId: ++out.counters; break;
                 case protocol::kStationForcesId: ++out.stations; break;
+                case protocol::kEstimateEvidenceId:
+                    ++out.evidences;
+                    SCOPEKIN_EXPECT_TRUE(protocol::decode(received.frame, out.evidence) ==
+                                         protocol::DecodeResult::ok);
+                    break;
                 default: ++out.other; break;
             }
         }
@@ -180,8 +193,20 @@ SCOPEKIN_TEST(SensorBox, PublishesEveryPeriodAndAHeartbeat) {
         SCOPEKIN_EXPECT_EQ(out.summaries, 1);
         SCOPEKIN_EXPECT_EQ(out.alarms, 1);
         SCOPEKIN_EXPECT_EQ(out.counters, 1);
+        SCOPEKIN_EXPECT_EQ(out.evidences, 1);
         SCOPEKIN_EXPECT_EQ(out.other, 0);
         SCOPEKIN_EXPECT_TRUE(out.estimate.estimate_valid);
+        // EstimateEvidence carries this period's estimator outputs (within the wire's steps).
+        const scopekin::kinetics::Outputs& estimated = bench.box.outputs();
+        SCOPEKIN_EXPECT_EQ(out.evidence.step_counter, out.estimate.step_counter);
+        SCOPEKIN_EXPECT_EQ(out.evidence.model_self_lock, estimated.model_self_lock_alarm);
+        SCOPEKIN_EXPECT_EQ(out.evidence.tip_from_tracker, estimated.tip_from_tracker);
+        // Half a wire step, in Q16.16 raw units: 0.0001, 0.01 and 0.001 (can_signal.hpp).
+        SCOPEKIN_EXPECT_TRUE(within_raw(out.evidence.loop_score, estimated.loop_score, 4));
+        SCOPEKIN_EXPECT_TRUE(within_raw(out.evidence.model_log_likelihood_ratio,
+                                        estimated.model_log_likelihood_ratio, 328));
+        SCOPEKIN_EXPECT_TRUE(within_raw(out.evidence.max_contact_force_uncertainty_N,
+                                        estimated.max_contact_force_uncertainty_N, 33));
         statuses += out.statuses;
     }
     // 100 periods = 0.5 s: the heartbeat every 20 periods (5), plus the first period's fault
