@@ -141,6 +141,8 @@ int run_replay(const ReplayOptions& options) {
         if (log.box_log) {
             s["compared_frames"] = r.compared_frames;
             s["differing_frames"] = r.differing_frames;
+            s["tracker_periods"] = r.tracker_periods;
+            s["uncomparable_frames"] = r.uncomparable_frames;
             s["identical"] = r.differing_frames == 0 && r.compared_frames > 0;
             s["first_difference"] = r.first_difference;
         }
@@ -159,6 +161,12 @@ int run_replay(const ReplayOptions& options) {
                         static_cast<unsigned long long>(r.compared_frames),
                         static_cast<unsigned long long>(r.differing_frames),
                         r.first_difference.empty() ? "" : "; first: ", r.first_difference.c_str());
+            if (r.tracker_periods > 0)
+                std::printf(
+                    "%llu periods fused the box's EM tracker, whose samples a CAN log does "
+                    "not hold: only their Alarms frames were compared (%llu frames not)\n",
+                    static_cast<unsigned long long>(r.tracker_periods),
+                    static_cast<unsigned long long>(r.uncomparable_frames));
         }
         print_box_faults(s["box"]);
         if (log.box_log) {

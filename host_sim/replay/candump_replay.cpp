@@ -180,6 +180,7 @@ ReplayResult replay_candump(const CandumpLog& log,
         if (on_period) on_period({time_us, &box->outputs(), box->box_faults(), box.get()});
     };
 
+    std::size_t tracker_shadow = 0;  // periods still carrying a fused tip (see below)
     if (log.box_log) {
         std::size_t i = 0;
         const std::size_t n = log.records.size();
@@ -203,11 +204,35 @@ ReplayResult replay_candump(const CandumpLog& log,
             for (const hal::CanFrame& f : bus->sent)
                 if (compared_output(f.id)) replayed.push_back(f);
             std::vector<bool> used(replayed.size(), false);
+            bool tracker_period = false;
+            for (std::size_t k = i; k < n && !is_input(log.records[k]); ++k) {
+                const hal::CanFrame& recorded = log.records[k].frame;
+                if (k > i && recorded.id == protocol::kKineticEstimateId) break;
+                protocol::EstimateEvidence evidence{};
+                if (recorded.id == protocol::kEstimateEvidenceId &&
+                    protocol::decode(recorded, evidence) == protocol::DecodeResult::ok &&
+                    evidence.tip_from_tracker) {
+                    tracker_period = true;
+                }
+            }
+            // The tip velocity averages the last kVelocityWindow published tips: the periods
+            // right after the tracker's carry its fused tips too.
+            if (tracker_period) {
+                tracker_shadow = kinetics::kVelocityWindow;
+            } else if (tracker_shadow > 0U) {
+                --tracker_shadow;
+                tracker_period = true;
+            }
+            if (tracker_period) ++result.tracker_periods;
             std::size_t j = i;
             for (; j < n && !is_input(log.records[j]); ++j) {
                 const hal::CanFrame& recorded = log.records[j].frame;
                 if (j > i && recorded.id == protocol::kKineticEstimateId) break;
                 if (!compared_output(recorded.id)) continue;
+                if (tracker_period && recorded.id != protocol::kAlarmsId) {
+                    ++result.uncomparable_frames;
+                    continue;
+                }
                 ++result.compared_frames;
                 std::size_t match = replayed.size();
                 for (std::size_t k = 0; k < replayed.size(); ++k) {

@@ -64,7 +64,13 @@ struct ReplayResult {
     std::uint64_t frames_filtered = 0;  ///< frames its receive filter held back (foreign ids)
     std::uint64_t compared_frames = 0;  ///< box log: recorded output frames compared
     std::uint64_t differing_frames = 0;
-    std::string first_difference;  ///< empty if none
+    /// Box log: periods whose recorded EstimateEvidence says the box fused its EM tracker's tip
+    /// (TipFromTracker, protocol 1.3). A CAN log does not hold the tracker's serial samples, so
+    /// only those periods' Alarms frames (which do not read the tip) are compared; the estimate,
+    /// the contact summary, the evidence and the station frames carry the fused tip.
+    std::uint64_t tracker_periods = 0;
+    std::uint64_t uncomparable_frames = 0;  ///< recorded frames of those periods not compared
+    std::string first_difference;           ///< empty if none
 };
 
 /// Replays the log through a box; `on_period` sees every period (time, outputs).
