@@ -57,6 +57,9 @@ struct EvidenceAlarm {
     [[nodiscard]] static Outputs step(const Config& config, const SlackTrees& trees,
                                       const Q16_16 (&features)[kSlackFeatureCount],
                                       State& state) noexcept;
+    /// One period of the debounce on a score given by the caller (step = the trees' score,
+    /// then this); returns the alarm.
+    [[nodiscard]] static bool debounce(const Config& config, Q16_16 score, State& state) noexcept;
 };
 
 /// The loop alarm's trees and settings fitted on the development set

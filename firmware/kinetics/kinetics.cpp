@@ -58,7 +58,8 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
     }
     if (config.loop_alarm_trees != nullptr &&
         (config.slack_trees == nullptr || !config.loop_alarm_trees->valid() ||
-         !config.loop_alarm.valid() ||
+         !config.loop_alarm.valid() || !config.loop_alarm_with_tracker.valid() ||
+         !config.slack_excess.valid() ||
          !same_features(*config.slack_trees, *config.loop_alarm_trees))) {
         return ConfigFault::loop_alarm;
     }
@@ -268,6 +269,15 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         TipOdometer::step(config.tip_odometer, odometer_inputs, state.tip_odometer);
     observed.tip_mm = odometer.tip_mm;
     observed.uncertainty_mm = odometer.uncertainty_mm;
+    // With the tracker, the scope taken up since the tip last kept pace: the loop alarm's gate.
+    SlackExcess::Inputs excess_inputs{};
+    excess_inputs.active = odometer.active;
+    excess_inputs.fresh = odometer.fresh;
+    excess_inputs.step = outputs.step_index;
+    excess_inputs.insertion_mm = state.insertion_mm;
+    excess_inputs.travel_mm = odometer.travel_mm;
+    const SlackExcess::Outputs excess =
+        SlackExcess::step(config.slack_excess, excess_inputs, state.slack_excess);
 
     // 4. Outputs.
     outputs.tip_path_mm = observed.tip_mm;
@@ -341,11 +351,17 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     outputs.model_self_lock_alarm = lock.alarm;
     outputs.self_lock_alarm = lock.alarm;
     if (config.loop_alarm_trees != nullptr) {
-        // Runs every period so its debounce is current when the evidence turns.
-        const EvidenceAlarm::Outputs loop = EvidenceAlarm::step(
-            config.loop_alarm, *config.loop_alarm_trees, regressed.features, state.loop_alarm);
-        outputs.loop_score = loop.score;
-        if (!evidence.trusted) outputs.self_lock_alarm = loop.alarm;
+        // Runs every period so its debounce is current when the evidence turns. With the
+        // tracker, the score counts only once the tip has fallen the gate behind the hand, at the
+        // level chosen for that gate (slack_excess.hpp); the published score is the trees'.
+        const Q16_16 score = SlackRegressor::predict(*config.loop_alarm_trees, regressed.features);
+        const bool loop_alarm =
+            excess.valid
+                ? EvidenceAlarm::debounce(config.loop_alarm_with_tracker,
+                                          excess.gate_open ? score : Q16_16{}, state.loop_alarm)
+                : EvidenceAlarm::debounce(config.loop_alarm, score, state.loop_alarm);
+        outputs.loop_score = score;
+        if (!evidence.trusted) outputs.self_lock_alarm = loop_alarm;
     }
     // The level reads the model's force: the regressed force is a conditional mean that misses
     // short peaks (on validation it flagged 18 of 365 contacts >= 14 N within 0.5 s, the

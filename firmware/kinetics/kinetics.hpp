@@ -20,6 +20,8 @@
 //      The tip odometer (tip_odometer.hpp): only while the test bench's EM tracker is connected,
 //      the tip sensor's travel along the scope's axis, fused with the handle's tip above by a
 //      scalar Kalman filter; without tracker samples the handle's tip is published unchanged.
+//      The slack excess (slack_excess.hpp): with the tracker, the scope taken up since the tip
+//      last kept pace with the hand (the truth's pace rule on the odometer's travel).
 //   4. Outputs: the published tip (the model's while trusted, else the regressor's, else the
 //      observer's when no trees are configured), its
 //      uncertainty and its velocity (mean over the last
@@ -33,8 +35,9 @@
 //      warning / critical. They read the reduced model (its tip, stick states and largest
 //      force, on which they were designed and verified), not the observer or the trees. While
 //      the model is not trusted the published self-lock alarm is the loop alarm from evidence
-//      (evidence_alarm.hpp: trees on the slack regressor's features, debounced); the model's own
-//      is model_self_lock_alarm.
+//      (evidence_alarm.hpp: trees on the slack regressor's features, debounced; with the
+//      tracker, the score counts only past the slack excess's gate, at its own level); the
+//      model's own is model_self_lock_alarm.
 //
 // Bad input (Config limits; all Q16.16):
 //   * no fresh sample: the last valid value is held and the signal's "stale" flag is set for as
@@ -58,6 +61,7 @@
 #include "kinetics/model_evidence.hpp"
 #include "kinetics/reduced_kinetics.hpp"
 #include "kinetics/reduced_tables.hpp"
+#include "kinetics/slack_excess.hpp"
 #include "kinetics/slack_regressor.hpp"
 #include "kinetics/tip_observer.hpp"
 #include "kinetics/tip_odometer.hpp"
@@ -120,6 +124,13 @@ struct Config {
     /// The bench's EM tracker's tip, fused with the handle's tip when it is connected
     /// (tip_odometer.hpp); without tracker samples it changes nothing.
     TipOdometer::Config tip_odometer{};
+    /// With the tracker: the scope taken up since the tip last kept pace (slack_excess.hpp); the
+    /// loop score counts only from its gate_mm on, and loop_alarm_with_tracker debounces it
+    /// (raise 0.60, clear 0.50, 10 and 100 periods: chosen on the development set with the
+    /// alarm's trees held out, host_sim/evaluate/tune_loop_gate.py). Without the tracker the
+    /// loop alarm is loop_alarm's, as before.
+    SlackExcess::Config slack_excess{};
+    EvidenceAlarm::Config loop_alarm_with_tracker{39321, 32768, 10U, 100U};
 };
 
 /// Why init refused a configuration (State::config_fault; none = accepted).
@@ -134,7 +145,8 @@ enum class ConfigFault : std::uint8_t {
     model_evidence,           ///< the model evidence refused its Config
     slack_regressor,          ///< the slack regressor's trees are not valid()
     contact_force_regressor,  ///< the force trees not valid(), or without matching slack trees
-    loop_alarm,               ///< the loop alarm's trees or settings not valid(), or no slack trees
+    loop_alarm,               ///< the loop alarm's trees or settings (with the tracker's too) not
+                              ///< valid(), or no slack trees
     tip_odometer,             ///< the tip odometer's settings not valid() at this period
 };
 
@@ -162,6 +174,7 @@ struct State {
     SlackRegressor::State slack{};
     EvidenceAlarm::State loop_alarm{};
     TipOdometer::State tip_odometer{};
+    SlackExcess::State slack_excess{};
 };
 
 void init(const Config& config, State& state) noexcept;

@@ -35,7 +35,8 @@ inline constexpr std::uint8_t kAllInputSignals = kHandleForce | kHandleTorque | 
 
 /// The test bench's optional serial sensors (EM tracker, tip force), as the executive last
 /// received them: the latest valid sample of each source.  Without a serial port every sample
-/// is zero, never fresh, never valid.  Today's estimator does not read them.
+/// is zero, never fresh, never valid.  The estimator reads the tip's and the sigmoid's poses
+/// (tip_odometer.hpp, slack_excess.hpp); the tip force is validated and held, not read.
 struct TrackerInputs {
     std::array<messages::EmPoseSample, messages::kEmSensorCount> pose{};  ///< by EmSensor
     messages::TipForceSample tip_force{};

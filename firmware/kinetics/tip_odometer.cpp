@@ -99,6 +99,7 @@ TipOdometer::Outputs TipOdometer::step(const Config& config, const Inputs& in,
         state.steps_since_update = 0;
         Outputs out{};
         out.active = true;
+        out.travel_mm = state.travel_mm;
         out.tip_mm = std::clamp(state.tip_mm, in.tip_min_mm, in.tip_max_mm);
         out.uncertainty_mm = sqrt_sat(state.variance_mm2);
         state.tip_mm = out.tip_mm;
@@ -126,6 +127,7 @@ TipOdometer::Outputs TipOdometer::step(const Config& config, const Inputs& in,
         state.sigmoid_seen = sigmoid_now;
         state.last_sigmoid_mm = sigmoid_mm;
         state.tip_mm = add_sat(state.tip_mm, dx);
+        state.travel_mm = add_sat(state.travel_mm, dx);
         state.variance_mm2 =
             std::min(add_sat(state.variance_mm2, mul_sat(config.q_mm2_per_mm, abs_sat(dx))),
                      config.max_variance_mm2);
@@ -147,8 +149,10 @@ TipOdometer::Outputs TipOdometer::step(const Config& config, const Inputs& in,
     state.tip_mm = std::clamp(state.tip_mm, in.tip_min_mm, in.tip_max_mm);
     Outputs out{};
     out.active = true;
+    out.fresh = fresh;
     out.tip_mm = state.tip_mm;
     out.uncertainty_mm = sqrt_sat(state.variance_mm2);
+    out.travel_mm = state.travel_mm;
     return out;
 }
 

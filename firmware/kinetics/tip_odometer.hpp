@@ -95,6 +95,7 @@ struct TipOdometer {
         Q16_16 tip_mm{};
         Q16_16 variance_mm2{};
         std::uint16_t steps_since_update{0};
+        Q16_16 travel_mm{};  ///< the odometry's own sum of advances (no handle pulls)
     };
     struct Inputs {
         const TrackerInputs* tracker{nullptr};  ///< nullptr: no tracker
@@ -109,8 +110,10 @@ struct TipOdometer {
     };
     struct Outputs {
         bool active{false};  ///< the tracker's tip is in use this period
+        bool fresh{false};   ///< a fresh pose moved the odometry this period
         Q16_16 tip_mm{};     ///< the fused tip (the handle's when not active)
         Q16_16 uncertainty_mm{};
+        Q16_16 travel_mm{};  ///< State::travel_mm (slack_excess.hpp reads it)
     };
 
     [[nodiscard]] static Outputs step(const Config& config, const Inputs& inputs,

@@ -143,6 +143,7 @@ int run_replay(const ReplayOptions& options) {
             s["differing_frames"] = r.differing_frames;
             s["tracker_periods"] = r.tracker_periods;
             s["uncomparable_frames"] = r.uncomparable_frames;
+            s["alarms_without_self_lock"] = r.alarms_without_self_lock;
             s["identical"] = r.differing_frames == 0 && r.compared_frames > 0;
             s["first_difference"] = r.first_difference;
         }
@@ -167,6 +168,11 @@ int run_replay(const ReplayOptions& options) {
                     "not hold: only their Alarms frames were compared (%llu frames not)\n",
                     static_cast<unsigned long long>(r.tracker_periods),
                     static_cast<unsigned long long>(r.uncomparable_frames));
+            if (r.alarms_without_self_lock > 0)
+                std::printf(
+                    "from the first of them on, %llu Alarms frames were compared without their "
+                    "self-lock fields (the loop alarm's gate reads the tracker's tip)\n",
+                    static_cast<unsigned long long>(r.alarms_without_self_lock));
         }
         print_box_faults(s["box"]);
         if (log.box_log) {
@@ -203,7 +209,10 @@ void add_replay_command(CLI::App& app) {
         "`scopekin-box --record` (it holds the box's own "
         "frames) is replayed "
         "period by period at the recorded times, and the replayed KineticEstimate, ContactSummary, "
-        "Alarms, EstimateEvidence and StationForces frames are compared with the recorded ones; a "
+        "Alarms, EstimateEvidence and StationForces frames are compared with the recorded ones "
+        "(periods that fused the box's EM tracker, EstimateEvidence.TipFromTracker, and the 10 "
+        "after them compare only their Alarms frames, and from the first of them on without the "
+        "self-lock fields: a CAN log does not hold the tracker's samples); a "
         "log of the handle sensors "
         "alone is run with a "
         "period every 5 ms. Exit status 0 done (and, for a box log, identical), 1 a box log "

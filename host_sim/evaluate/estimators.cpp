@@ -66,7 +66,8 @@ const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
         {"box",
          "the box (slack regressor, contact force trees and loop alarm from evidence; the model's "
-         "where the handle agrees with it; contact-force level from the reduced model)",
+         "where the handle agrees with it; contact-force level from the reduced model; with the "
+         "bench's EM tracker: the tip odometer and the loop alarm's slack gate)",
          box},
         {"depth_replay", "depth replay (the reduced model's tip, force and alarms)", depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},

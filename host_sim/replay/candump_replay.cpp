@@ -1,5 +1,6 @@
 #include "host_sim/replay/candump_replay.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <deque>
 #include <fstream>
@@ -82,6 +83,23 @@ std::string frame_text(const hal::CanFrame& f) {
         s += b;
     }
     return s;
+}
+
+bool same_frame(const hal::CanFrame& a, const hal::CanFrame& b) {
+    return a.length == b.length &&
+           std::equal(a.data.begin(), a.data.begin() + a.length, b.data.begin());
+}
+
+/// Two Alarms frames equal but for SelfLockAlarm and SelfLockRaised.
+bool same_but_self_lock(const hal::CanFrame& a, const hal::CanFrame& b) {
+    protocol::Alarms x{}, y{};
+    if (protocol::decode(a, x) != protocol::DecodeResult::ok ||
+        protocol::decode(b, y) != protocol::DecodeResult::ok) {
+        return same_frame(a, b);
+    }
+    x.self_lock = y.self_lock = false;
+    x.self_lock_raised = y.self_lock_raised = 0;
+    return same_frame(protocol::encode(x), protocol::encode(y));
 }
 
 }  // namespace
@@ -181,6 +199,7 @@ ReplayResult replay_candump(const CandumpLog& log,
     };
 
     std::size_t tracker_shadow = 0;  // periods still carrying a fused tip (see below)
+    bool tracker_seen = false;       // the loop alarm's state may carry the tracker's gate
     if (log.box_log) {
         std::size_t i = 0;
         const std::size_t n = log.records.size();
@@ -224,6 +243,7 @@ ReplayResult replay_candump(const CandumpLog& log,
                 tracker_period = true;
             }
             if (tracker_period) ++result.tracker_periods;
+            tracker_seen = tracker_seen || tracker_period;
             std::size_t j = i;
             for (; j < n && !is_input(log.records[j]); ++j) {
                 const hal::CanFrame& recorded = log.records[j].frame;
@@ -242,10 +262,11 @@ ReplayResult replay_candump(const CandumpLog& log,
                     }
                 }
                 if (match < replayed.size()) used[match] = true;
-                const bool same =
-                    match < replayed.size() && replayed[match].length == recorded.length &&
-                    std::equal(recorded.data.begin(), recorded.data.begin() + recorded.length,
-                               replayed[match].data.begin());
+                const bool without_self_lock = tracker_seen && recorded.id == protocol::kAlarmsId;
+                if (without_self_lock) ++result.alarms_without_self_lock;
+                const bool same = match < replayed.size() &&
+                                  (without_self_lock ? same_but_self_lock(recorded, replayed[match])
+                                                     : same_frame(recorded, replayed[match]));
                 if (!same) {
                     ++result.differing_frames;
                     if (result.first_difference.empty())

@@ -70,7 +70,11 @@ struct ReplayResult {
     /// the contact summary, the evidence and the station frames carry the fused tip.
     std::uint64_t tracker_periods = 0;
     std::uint64_t uncomparable_frames = 0;  ///< recorded frames of those periods not compared
-    std::string first_difference;           ///< empty if none
+    /// Alarms frames from the first tracker period on, compared without SelfLockAlarm and
+    /// SelfLockRaised: with the tracker the loop alarm's gate reads the tracker's tip
+    /// (slack_excess.hpp), and the raise counter carries any difference on.
+    std::uint64_t alarms_without_self_lock = 0;
+    std::string first_difference;  ///< empty if none
 };
 
 /// Replays the log through a box; `on_period` sees every period (time, outputs).

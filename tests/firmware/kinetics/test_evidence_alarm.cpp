@@ -3,13 +3,15 @@
 // below the clear level clears it on exactly the clear_steps-th; a score that dips back resets the
 // count; through the kinetic estimator the published self-lock alarm is the evidence alarm while
 // the model is not trusted and the model's own stays in model_self_lock_alarm; settings or trees
-// that do not fit are refused. Runs as GoogleTest on x86-64 / aarch64 and with portable_check's
+// that do not fit are refused; with the bench's EM tracker the score counts only once the tip has
+// fallen the gate (6 mm) behind the hand (slack_excess.hpp). Runs as GoogleTest on x86-64 / aarch64 and with portable_check's
 // runner on Cortex-M4.
 #include <cstdint>
 
 #include "kinetics/default_reduced_tables.hpp"
 #include "kinetics/evidence_alarm.hpp"
 #include "kinetics/kinetics.hpp"
+#include "messages/em_tracker_samples.hpp"
 #include "portable_check.hpp"
 
 namespace {
@@ -111,6 +113,45 @@ SCOPEKIN_TEST(EvidenceAlarm, ThePublishedAlarmIsTheEvidenceWhileTheModelIsNotTru
     }
     SCOPEKIN_EXPECT_TRUE(g_out.self_lock_alarm == g_out.model_self_lock_alarm);
     SCOPEKIN_EXPECT_EQ(g_out.loop_score.raw(), 0);
+}
+
+SCOPEKIN_TEST(EvidenceAlarm, WithTheTrackerTheScoreCountsOnlyOnceTheTipFallsBehind) {
+    // A constant score of 0.8 and 11 N of push (the model not trusted). The hand advances 1 mm
+    // per tracker pose (every 6 periods). While the tip keeps pace the gate is closed and the
+    // alarm stays down; once the tip stops, the gate opens at 6 mm taken up (the 6th pose after
+    // the stop) and the alarm rises 3 periods later (settings(): 3 periods above 0.5).
+    static const SlackTrees high = constant_score(kOne * 4 / 5);
+    kin::Config config = kin::default_config();
+    config.loop_alarm_trees = &high;
+    config.loop_alarm = settings();
+    config.loop_alarm_with_tracker = settings();
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
+    kin::Inputs in{};
+    in.handle_force_N = Q16_16::from_int(11);
+    in.fresh_mask = kin::kAllInputSignals;
+    in.tracker.valid_mask = scopekin::messages::kEmSourceTip;
+    in.tracker.pose[0].orientation = {Q16_16::from_int(1), Q16_16{}, Q16_16{}, Q16_16{}};
+    const auto run_poses = [&](int from, int to, bool tip_moves) {
+        for (int k = from; k <= to; ++k) {
+            in.insertion_mm = Q16_16::from_int(100 + k);
+            if (tip_moves) in.tracker.pose[0].position_mm[0] = Q16_16::from_int(k);
+            for (int period = 0; period < 6; ++period) {
+                in.tracker.fresh_mask =
+                    period == 0 ? std::uint8_t{scopekin::messages::kEmSourceTip} : std::uint8_t{0};
+                kin::step(in, g_state, g_out);
+            }
+        }
+    };
+    run_poses(0, 120, true);
+    SCOPEKIN_EXPECT_TRUE(g_out.tip_from_tracker);
+    SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
+    SCOPEKIN_EXPECT_EQ(g_out.loop_score.raw(), kOne * 4 / 5);
+    SCOPEKIN_EXPECT_TRUE(!g_out.self_lock_alarm);  // 0.8, but the tip keeps pace
+    run_poses(121, 125, false);                    // 5 mm taken up: the gate still closed
+    SCOPEKIN_EXPECT_TRUE(!g_out.self_lock_alarm);
+    run_poses(126, 126, false);  // 6 mm: open from this pose's first period, up on its third
+    SCOPEKIN_EXPECT_TRUE(g_out.self_lock_alarm);
 }
 
 SCOPEKIN_TEST(EvidenceAlarm, SettingsAndTreesThatDoNotFitAreRefused) {
