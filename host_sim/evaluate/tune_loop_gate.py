@@ -120,14 +120,9 @@ def main():
     ap.add_argument("--out", required=True, help="the JSON report to write")
     ap.add_argument("--png", help="a picture: detections against false alarms per gate")
     a = ap.parse_args()
-    cases = loop.features.read_cases(a.eval_dir, load)
+    cases = odometer.read_tracker_cases(a.eval_dir, load, "tune_loop_gate.py")
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
-    if len(patients) < 2:
-        print(f"tune_loop_gate.py: {a.eval_dir}: {len(cases)} complete cases with EM tracker samples "
-              "(cases/*/summary.json with status complete, recording.csv with em_tip_*), need at "
-              "least 2 patients", file=sys.stderr)
-        sys.exit(2)
     for k, p in enumerate(patients):
         print(f"tune: the loop alarm's trees without patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
         trees = loop.fit([c for c in cases if patient(c) != p])

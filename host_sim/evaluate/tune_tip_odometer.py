@@ -155,6 +155,18 @@ def load(folder, sigmoid_reach_mm):
     return c if c["tracker"] is not None else None
 
 
+def read_tracker_cases(eval_dir, load, script):
+    """The complete cases with the tracker's samples (`load` returns None for the others); with
+    fewer than 2 patients the script exits 2 saying so."""
+    cases = slack.read_cases(eval_dir, load)
+    if len({c["name"].split("-")[0] for c in cases}) < 2:
+        print(f"{script}: {eval_dir}: {len(cases)} complete cases with EM tracker samples "
+              "(cases/*/summary.json with status complete, recording.csv with em_tip_*), need at "
+              "least 2 patients", file=sys.stderr)
+        sys.exit(2)
+    return cases
+
+
 def plot(path, rows, handle):
     import matplotlib
     matplotlib.use("Agg")
@@ -195,12 +207,8 @@ def main():
     if not (np.isfinite(a.sigmoid_reach) and a.sigmoid_reach >= 0):
         print(f"tune_tip_odometer.py: --sigmoid-reach {a.sigmoid_reach:g}: need a distance >= 0 mm", file=sys.stderr)
         sys.exit(2)
-    cases = slack.read_cases(a.eval_dir, lambda folder: load(folder, a.sigmoid_reach))
-    if len({c["name"].split("-")[0] for c in cases}) < 2:
-        print(f"tune_tip_odometer.py: {a.eval_dir}: {len(cases)} complete cases with EM tracker "
-              "samples (cases/*/summary.json with status complete, recording.csv with em_tip_*), "
-              "need at least 2 patients", file=sys.stderr)
-        sys.exit(2)
+    cases = read_tracker_cases(a.eval_dir, lambda folder: load(folder, a.sigmoid_reach),
+                               "tune_tip_odometer.py")
     held_out_handle(cases)
     law = uncertainty_law(cases)
     handle_rms = np.array([np.sqrt(np.mean((c["slack_mm"] - c["y"]) ** 2)) for c in cases])
