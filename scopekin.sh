@@ -9,7 +9,7 @@ cd "$ROOT"
 # `scopekin` program, plus matplotlib for its plots; the tests need the rest (GoogleTest, Google
 # Benchmark, the cross toolchains, the emulators, clang for the fuzzers, the VM test's tools).
 MAIN_PACKAGES=(
-  cmake ninja-build g++
+  cmake ninja-build g++ ccache
   libeigen3-dev libcli11-dev nlohmann-json3-dev
   python3 python3-matplotlib
 )
@@ -49,6 +49,8 @@ Commands:
                       VM and the discrepancy checks (test preset 'host-quick'); same summary line.
   -h, --help, help    Show this help.
 
+Builds go through ccache (cache in ~/.cache/ccache, 8 GB at most), so a second build of the same
+sources, in this clone or another, recompiles only what changed; SCOPEKIN_NO_CCACHE=1 turns it off.
 Packages are checked with dpkg-query; only if some are missing does the script run
 'apt-get update' and 'apt-get install -y --no-install-recommends <missing>' (as root, or via sudo).
 Logs of 'test' are kept in build/logs/<preset>.log.
@@ -76,6 +78,20 @@ ensure_packages() {
     apt-get install -y --no-install-recommends "${missing[@]}"
 }
 
+# use_compiler_cache: compile through ccache, so that a second build of the same sources (another
+# clone, a CI run after a small change) recompiles only what changed.  Paths are hashed relative to
+# the checkout (CCACHE_BASEDIR, CCACHE_NOHASHDIR), so clones in other folders share the cache; a
+# -D that holds an absolute path (the CLI's data files) still keys its objects to their clone.
+# The cache lives in ~/.cache/ccache (ccache's default), capped at 8 GB.  SCOPEKIN_NO_CCACHE=1
+# builds without it, e.g. to time a cold build.
+use_compiler_cache() {
+  if [[ "${SCOPEKIN_NO_CCACHE:-0}" == 1 ]] || ! command -v ccache >/dev/null; then
+    return 0
+  fi
+  export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
+  export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=true CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
+}
+
 # stage <n> <of> <text>: one progress line, with the seconds since the command started.
 stage() {
   echo "scopekin.sh main [$1/$2] $3 (at $((SECONDS - MAIN_START)) s)"
@@ -84,6 +100,7 @@ stage() {
 cmd_main() {
   stage 1 4 "packages: ${MAIN_PACKAGES[*]}"
   ensure_packages "${MAIN_PACKAGES[@]}"
+  use_compiler_cache
   stage 2 4 "configure: cmake --preset app"
   cmake --preset app --log-level=WARNING
   stage 3 4 "build: cmake --build --preset app (the scopekin program and what it needs)"
@@ -133,6 +150,7 @@ cmd_test() {
 # host-quick test preset.  Prints the summary; fails if anything failed.
 run_presets() {
   ensure_packages "${TEST_PACKAGES[@]}"
+  use_compiler_cache
   mkdir -p build/logs
 
   local total=0 failed=0 broken=() report=() start seconds log line t f p configure test_preset
