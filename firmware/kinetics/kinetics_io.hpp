@@ -69,7 +69,7 @@ enum FaultFlag : std::uint32_t {
     kFaultRollRange = 1U << 8U,
     kFaultContactResidual = 1U << 9U,  ///< the contact solve left a residual above its bound
     kFaultSaturation = 1U << 10U,      ///< an internal quantity hit its fixed-point limit
-    /// Depth outside the reduced model's travel run in use (default 20..1680 mm): the model (its
+    /// Depth outside the reduced model's travel run in use (default 20..1692 mm): the model (its
     /// stations, forces and monitors) is clamped to it; the published tip (the regressor's) is not.
     kFaultDepthOutsideModel = 1U << 11U,
     kFaultConfig = 1U << 12U,        ///< init refused the configuration: no estimate

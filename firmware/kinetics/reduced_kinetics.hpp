@@ -22,7 +22,7 @@
 //   * travel runs, keyed by depth [mm]: segment 0 advances from the shallowest depth (default:
 //     20 -> 760 mm at 20 mm/s, a knot every 1 mm); others advance or withdraw over other depths
 //     (default: the withdrawal 680 -> 560 mm that straightens the sigmoid loop, a knot every
-//     0.75 mm; the re-advance after it, 760 -> 1680 mm, a knot every 2 mm);
+//     0.75 mm; the re-advance after it, 752 -> 1692 mm, a knot every 2 mm);
 //   * hold runs, keyed by the time the hand has held the depth still [s] (default: 2.5 s at
 //     680 mm, in which the loaded scope relaxes and is rolled 90°, a knot every 0.05 s).
 // The step latches the hand's DIRECTION (reversed once the depth has gone back 0.5 mm from its

@@ -165,7 +165,9 @@ SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
     SCOPEKIN_EXPECT_EQ(head.segments[1].kind, static_cast<int>(kin::kSegmentHold));
     SCOPEKIN_EXPECT_EQ(head.segments[2].direction, -1);
     SCOPEKIN_EXPECT_EQ(head.segments[3].direction, 1);
-    SCOPEKIN_EXPECT_EQ(head.segments[3].key_start.raw(), Q16_16::from_int(760).raw());
+    SCOPEKIN_EXPECT_EQ(head.segments[3].key_start.raw(), Q16_16::from_int(752).raw());
+    SCOPEKIN_EXPECT_EQ(kin::detail::segment_end_mm(head.segments[3]).raw(),
+                       Q16_16::from_int(1692).raw());
     advance_to(680);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{0});
     for (int i = 0; i < 100; ++i)
@@ -189,7 +191,7 @@ SCOPEKIN_TEST(KineticsStep, TheHandsMotionPicksTheTrainingRun) {
 }
 
 SCOPEKIN_TEST(KineticsStep, BeyondTheFirstAdvanceTheReAdvanceRunCoversTheDepthBothWays) {
-    // Advancing past 760 mm: the re-advance run (segment 3, 760..1680 mm), inside the model.
+    // Advancing past 760 mm: the re-advance run (segment 3, 752..1692 mm), inside the model.
     advance_to(760);
     SCOPEKIN_EXPECT_EQ(g_state.model.segment, std::size_t{3});  // the last run holding 760 mm
     for (int d = 761; d <= 1200; ++d)

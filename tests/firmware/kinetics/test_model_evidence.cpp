@@ -40,15 +40,16 @@ kin::State g_state;
 kin::Outputs g_out;
 
 /// The handle force the default tables' advance runs needed at an integer depth, interpolated
-/// as the firmware does: segment 0, 20..760 mm, a knot every 1 mm (the knot itself); segment 3,
-/// 760..1680 mm, a knot every 2 mm (odd depths half way, a + 0.5 (b - a) in Q16.16).
+/// as the firmware does: segment 0, 20..760 mm, a knot every 1 mm (the knot itself); from 752 mm
+/// on segment 3, 752..1692 mm, a knot every 2 mm (odd depths half way, a + 0.5 (b - a) in Q16.16):
+/// advancing where both hold the depth, the step takes the later run.
 Q16_16 training_force_at(int depth_mm) {
     const kin::ReducedTablesQ16& tables = kin::default_reduced_tables();
     const auto& head = tables.header();
     const std::size_t force = head.stations * kin::kStationValueCount + kin::kKnotHandleForce;
-    if (depth_mm < 760) return tables.value(static_cast<std::size_t>(depth_mm - 20), force);
+    if (depth_mm < 752) return tables.value(static_cast<std::size_t>(depth_mm - 20), force);
     const std::size_t knot =
-        head.segments[3].first_knot + static_cast<std::size_t>(depth_mm - 760) / 2U;
+        head.segments[3].first_knot + static_cast<std::size_t>(depth_mm - 752) / 2U;
     const Q16_16 a = tables.value(knot, force);
     if (depth_mm % 2 == 0) return a;
     return a + Q16_16::from_ratio(1, 2) * (tables.value(knot + 1U, force) - a);
@@ -178,11 +179,11 @@ SCOPEKIN_TEST(ModelEvidence, AHandleForce3NAboveTheTrainingsTurnsTheTrustAfter93
 
 SCOPEKIN_TEST(ModelEvidence, PastTheModelsDepthRangeTheModelIsNotTrusted) {
     kin::init(kin::default_config(), g_state);
-    for (int d = 20; d <= 1680; ++d)
+    for (int d = 20; d <= 1692; ++d)
         step_at(d, training_force_at(d));
     SCOPEKIN_EXPECT_TRUE(g_out.tip_from_model);
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags & kin::kFaultDepthOutsideModel, 0U);
-    step_at(1681, training_force_at(1680));
+    step_at(1693, training_force_at(1692));
     SCOPEKIN_EXPECT_TRUE((g_out.fault_flags & kin::kFaultDepthOutsideModel) != 0U);
     SCOPEKIN_EXPECT_EQ(g_out.model_log_likelihood_ratio.raw(), -kLimitRaw);
     SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);

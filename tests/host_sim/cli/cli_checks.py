@@ -81,7 +81,7 @@ def check_demo():
     expect(s["procedure"]["cecum_reached"] and s["procedure"]["insertion_at_cecum_mm"] < 1600.0,
            f"the cecum reached with less than 1,600 mm inserted: {s['procedure']}")
     expect(s["peak_handle_force_N"]["true"] < 43.0, "peak handle force below the 43 N peak push measured in patients (firmware/fixed_point/RANGES.md [A])")
-    # The reduced model covers the whole run (its tables hold this job's re-advance to 1680 mm:
+    # The reduced model covers the whole run (its tables hold this job's re-advance to 1692 mm:
     # model/reduction/training.json), so the box never leaves it; the faults it did see are printed.
     first = s["firmware"]["fault_first_s"]
     expect("depth_outside_model" not in first, f"the whole run inside the reduced model: {first}")
@@ -789,7 +789,8 @@ def check_evaluate():
     expect(card["overall"]["scored"] == len(names), f"every case scored: {card['overall']['not_scored']}")
     table = rows(os.path.join(d, "scorecard.csv"))
     expect(sorted((r["case"], r["estimator"]) for r in table) ==
-           sorted((n, e) for n in names for e in ["box", "depth_replay", "force_monitor", "insertion_depth"]),
+           sorted((n, e) for n in names for e in ["box", "depth_replay", "force_monitor", "insertion_depth",
+                                                         "definitions_confirmation"]),
            "one CSV row per case x estimator")
     # The scores against the run's own files, computed again here: the tip error of the box
     # (firmware.csv's published tip against truth.csv, joined row by row) and of the depth replay
