@@ -136,6 +136,7 @@ std::vector<Episode> read_episodes(const Json& list, const std::string& where) {
         Episode ep;
         ep.onset_s = e["onset_s"].get<double>();
         ep.end_s = optional_number(e, "end_s");
+        ep.confirmed_s = optional_number(e, "detected_s");
         if (e.contains("type") && e["type"].is_string() && e.contains("region") &&
             e["region"].is_string())
             ep.label = e["type"].get<std::string>() + " " + e["region"].get<std::string>();

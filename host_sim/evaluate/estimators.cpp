@@ -60,6 +60,36 @@ EstimatorOutput insertion_depth(const CaseRun& run, const EstimatorContext&) {
     return o;
 }
 
+/// Alarm up over each episode, from its confirmation (else its onset) to its end (else the run's).
+std::vector<std::uint8_t> confirmed_episodes(const std::vector<double>& time_s,
+                                             const std::vector<Episode>& episodes) {
+    std::vector<std::uint8_t> up(time_s.size(), 0);
+    for (const Episode& e : episodes) {
+        const double from = e.confirmed_s.value_or(e.onset_s);
+        for (std::size_t k = 0; k < time_s.size(); ++k)
+            if (time_s[k] >= from && (!e.end_s || time_s[k] < *e.end_s)) up[k] = 1;
+    }
+    return up;
+}
+
+/// (e) The definitions' own confirmation (a reference, not an estimator): a detector that knew
+/// the true tip and forces exactly and raised each alarm when the truth's definition confirms
+/// the episode (model/truth/README.md): a loop when the excess reaches 20 mm, which the truth then
+/// dates back to the knee where the take-up began; a contact level when the force crosses it.
+/// What it scores within 0.5 s of the onset is what waiting for the definition's own evidence
+/// can score; an alarm that beats it must raise before the definition says "loop".
+EstimatorOutput definitions_confirmation(const CaseRun& run, const EstimatorContext&) {
+    EstimatorOutput o;
+    o.loop_alarm = confirmed_episodes(run.time_s, run.loop_episodes);
+    const std::vector<std::uint8_t> warning = confirmed_episodes(run.time_s, run.warning_episodes);
+    const std::vector<std::uint8_t> critical =
+        confirmed_episodes(run.time_s, run.critical_episodes);
+    o.contact_level.resize(run.time_s.size());
+    for (std::size_t k = 0; k < run.time_s.size(); ++k)
+        o.contact_level[k] = critical[k] != 0 ? 2 : (warning[k] != 0 ? 1 : 0);
+    return o;
+}
+
 }  // namespace
 
 const std::vector<Estimator>& estimator_registry() {
@@ -72,6 +102,10 @@ const std::vector<Estimator>& estimator_registry() {
         {"depth_replay", "depth replay (the reduced model's tip, force and alarms)", depth_replay},
         {"force_monitor", "handle force monitor (baseline)", handle_force_monitor},
         {"insertion_depth", "insertion depth as the tip (baseline, no alarms)", insertion_depth},
+        {"definitions_confirmation",
+         "the truth's definitions, confirmed (reference, not an estimator: each alarm raised when "
+         "the definition confirms the episode, a loop at 20 mm of excess)",
+         definitions_confirmation},
     };
     return registry;
 }

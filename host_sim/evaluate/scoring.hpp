@@ -19,6 +19,9 @@ struct Episode {
     double onset_s = 0;
     std::optional<double> end_s;
     std::string label;  ///< loop: "N sigmoid"; force: "" (for reports only)
+    /// When the definition's own threshold was reached (loop: the excess at 20 mm, summary.json
+    /// "detected_s"); absent where it is the onset (force episodes: the force crossing the level).
+    std::optional<double> confirmed_s;
 };
 
 /// An error measure over the periods where both series are defined.

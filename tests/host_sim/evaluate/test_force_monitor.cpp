@@ -113,8 +113,8 @@ TEST(ForceMonitor, TuningFindsThresholdsThatDetectTheEpisodesWithoutFalseAlarms)
     TuningCase c;
     c.name = "synthetic";
     c.features = force_monitor_features(synthetic(10.0, force, advancing_20));
-    c.loops = {{3.0, 5.0, ""}};
-    c.warnings = {{3.0, 5.0, ""}};
+    c.loops = {{3.0, 5.0, "", std::nullopt}};
+    c.warnings = {{3.0, 5.0, "", std::nullopt}};
     const auto tuned = tune_force_monitor({c}, 0.0, "development");
     const double loop_force =
         tuned["loop"]["force_N"].is_null() ? kOff : tuned["loop"]["force_N"].get<double>();

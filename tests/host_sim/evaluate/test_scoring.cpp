@@ -49,7 +49,7 @@ TEST(Scoring, ErrorIsTheRmsAndTheLargestOfTheDefinedPeriods) {
 
 TEST(Scoring, ARiseWithinHalfASecondDetectsWithItsLatencyAndTheLingerAfterTheEnd) {
     const auto t = periods(10.0);
-    const std::vector<Episode> episodes{{2.0, 4.0, ""}};
+    const std::vector<Episode> episodes{{2.0, 4.0, "", std::nullopt}};
     const AlarmScore s = score_alarm(t, alarm(t, {{2.3, 4.5}}), episodes, kPeriod);
     EXPECT_EQ(s.episodes, 1U);
     EXPECT_EQ(s.detected, 1U);
@@ -66,12 +66,14 @@ TEST(Scoring, ARiseWithinHalfASecondDetectsWithItsLatencyAndTheLingerAfterTheEnd
 
 TEST(Scoring, ARiseUpToOneSecondEarlyDetectsWithLatencyZero) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{1.1, 3.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s =
+        score_alarm(t, alarm(t, {{1.1, 3.0}}), {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(s.detected, 1U);
     EXPECT_DOUBLE_EQ(s.latency_s[0], 0.0);
     EXPECT_DOUBLE_EQ(s.linger_s[0], 0.0);  // down before the end
     // 1.1 s early is outside the window: the rise is a false alarm and the episode is missed.
-    const AlarmScore early = score_alarm(t, alarm(t, {{0.9, 6.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore early =
+        score_alarm(t, alarm(t, {{0.9, 6.0}}), {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(early.detected, 0U);
     EXPECT_EQ(early.missed, 1U);
     EXPECT_EQ(early.false_alarms, 1U);
@@ -80,7 +82,8 @@ TEST(Scoring, ARiseUpToOneSecondEarlyDetectsWithLatencyZero) {
 
 TEST(Scoring, AnAlarmUpLongBeforeTheOnsetIsAFalseAlarmNotADetection) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{0.5, 9.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s =
+        score_alarm(t, alarm(t, {{0.5, 9.0}}), {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(s.detected, 0U);
     EXPECT_EQ(s.late, 0U);
     EXPECT_EQ(s.missed, 1U);
@@ -92,7 +95,8 @@ TEST(Scoring, AnAlarmUpLongBeforeTheOnsetIsAFalseAlarmNotADetection) {
 
 TEST(Scoring, ARiseLaterInTheEpisodeIsLateAndNotFalse) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{3.0, 3.5}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s =
+        score_alarm(t, alarm(t, {{3.0, 3.5}}), {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(s.detected, 0U);
     EXPECT_EQ(s.late, 1U);
     EXPECT_EQ(s.missed, 0U);
@@ -103,8 +107,8 @@ TEST(Scoring, ARiseLaterInTheEpisodeIsLateAndNotFalse) {
 
 TEST(Scoring, ChatterInsideAnEpisodeIsOneDetectionAndNoFalseAlarm) {
     const auto t = periods(10.0);
-    const AlarmScore s =
-        score_alarm(t, alarm(t, {{2.1, 2.4}, {2.6, 2.8}, {3.0, 3.9}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s = score_alarm(t, alarm(t, {{2.1, 2.4}, {2.6, 2.8}, {3.0, 3.9}}),
+                                     {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(alarm_rises(t, alarm(t, {{2.1, 2.4}, {2.6, 2.8}, {3.0, 3.9}})).size(), 3U);
     EXPECT_EQ(s.detected, 1U);
     EXPECT_EQ(s.false_alarms, 0U);
@@ -115,7 +119,8 @@ TEST(Scoring, RisesOutsideEveryEpisodeAreFalseAlarmsPer10Minutes) {
     const auto t = periods(60.0);
     // Episodes 10-12 s (detected) and 40 s to the end (open: no end, no linger); rises at 5 s,
     // 20 s and 30 s are false: 3 in 60 s = 30 per 10 minutes.
-    const std::vector<Episode> episodes{{10.0, 12.0, ""}, {40.0, std::nullopt, ""}};
+    const std::vector<Episode> episodes{{10.0, 12.0, "", std::nullopt},
+                                        {40.0, std::nullopt, "", std::nullopt}};
     const auto up = alarm(t, {{5, 6}, {10.2, 11}, {20, 21}, {30, 31}, {40.4, 60}});
     const AlarmScore s = score_alarm(t, up, episodes, kPeriod);
     EXPECT_EQ(s.episodes, 2U);
@@ -129,7 +134,8 @@ TEST(Scoring, RisesOutsideEveryEpisodeAreFalseAlarmsPer10Minutes) {
 
 TEST(Scoring, AnAlarmStillUpAtTheEndLingersToTheEndOfTheRun) {
     const auto t = periods(10.0);
-    const AlarmScore s = score_alarm(t, alarm(t, {{2.0, 10.0}}), {{2.0, 4.0, ""}}, kPeriod);
+    const AlarmScore s =
+        score_alarm(t, alarm(t, {{2.0, 10.0}}), {{2.0, 4.0, "", std::nullopt}}, kPeriod);
     ASSERT_EQ(s.linger_s.size(), 1U);
     EXPECT_NEAR(s.linger_s[0], 6.0, 1e-9);  // from 4 s to the run's end (10 s)
 }
@@ -139,7 +145,8 @@ TEST(Scoring, OneRiseDetectsOneEpisodeOnly) {
     // Two episodes 0.3 s apart: the one rise (at 2.1 s) is in both windows; it detects the
     // first, and the second is missed.
     const AlarmScore s =
-        score_alarm(t, alarm(t, {{2.1, 3.0}}), {{2.0, 2.2, ""}, {2.3, 2.8, ""}}, kPeriod);
+        score_alarm(t, alarm(t, {{2.1, 3.0}}),
+                    {{2.0, 2.2, "", std::nullopt}, {2.3, 2.8, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(s.detected, 1U);
     EXPECT_EQ(s.missed, 1U);
     EXPECT_EQ(s.false_alarms, 0U);
@@ -150,7 +157,7 @@ TEST(Scoring, NoEpisodesNoAlarmsGiveNaNShares) {
     const AlarmScore s = score_alarm(t, alarm(t, {}), {}, kPeriod);
     EXPECT_TRUE(std::isnan(s.detected_share()));
     EXPECT_DOUBLE_EQ(s.false_alarms_per_10min(), 0.0);
-    const AlarmScore empty = score_alarm({}, {}, {{1.0, 2.0, ""}}, kPeriod);
+    const AlarmScore empty = score_alarm({}, {}, {{1.0, 2.0, "", std::nullopt}}, kPeriod);
     EXPECT_EQ(empty.missed, 1U);
 }
 
@@ -159,8 +166,10 @@ TEST(Scoring, BadInputIsRefused) {
     EXPECT_THROW(score_alarm(t, std::vector<std::uint8_t>(3, 0), {}, kPeriod),
                  std::invalid_argument);
     EXPECT_THROW(score_alarm({0.0, 0.0}, {0, 0}, {}, kPeriod), std::invalid_argument);
-    EXPECT_THROW(score_alarm(t, alarm(t, {}), {{0.5, 0.2, ""}}, kPeriod), std::invalid_argument);
-    EXPECT_THROW(score_alarm(t, alarm(t, {}), {{0.5, 0.6, ""}, {0.1, 0.2, ""}}, kPeriod),
+    EXPECT_THROW(score_alarm(t, alarm(t, {}), {{0.5, 0.2, "", std::nullopt}}, kPeriod),
+                 std::invalid_argument);
+    EXPECT_THROW(score_alarm(t, alarm(t, {}),
+                             {{0.5, 0.6, "", std::nullopt}, {0.1, 0.2, "", std::nullopt}}, kPeriod),
                  std::invalid_argument);
     EXPECT_THROW(score_alarm(t, alarm(t, {}), {}, 0.0), std::invalid_argument);
     EXPECT_THROW(score_alarm(t, alarm(t, {}), {}, kPeriod, AlarmRule{-1.0, 0.5}),
