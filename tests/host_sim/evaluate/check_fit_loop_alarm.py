@@ -10,21 +10,15 @@ usage: check_fit_loop_alarm.py CHECK SOURCE_DIR WORK_DIR   (CHECK: synthetic | b
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 
 import numpy as np
 
+from check_support import expect, failures, fresh_folder
+
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 FIT = os.path.join(SOURCE, "host_sim", "evaluate", "fit_loop_alarm.py")
-failures = []
-
-
-def expect(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what)
-    if not ok:
-        failures.append(what)
 
 
 def write_case(root, name, seed):
@@ -57,8 +51,7 @@ def fit(*args):
     return subprocess.run(["/usr/bin/python3", FIT, *args], capture_output=True, text=True)
 
 
-shutil.rmtree(WORK, ignore_errors=True)
-os.makedirs(WORK)
+fresh_folder(WORK)
 if CHECK == "synthetic":
     for k in range(4):
         write_case(WORK, f"p{k + 1}-synthetic-s1", k + 1)

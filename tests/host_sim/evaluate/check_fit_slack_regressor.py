@@ -11,11 +11,12 @@ usage: check_fit_slack_regressor.py CHECK SOURCE_DIR WORK_DIR   (CHECK: syntheti
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 
 import numpy as np
+
+from check_support import expect, failures, fresh_folder
 
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 FIT = os.path.join(SOURCE, "host_sim", "evaluate", "fit_slack_regressor.py")
@@ -47,15 +48,7 @@ def fit(*args):
     return subprocess.run(["/usr/bin/python3", FIT, *args], capture_output=True, text=True)
 
 
-shutil.rmtree(WORK, ignore_errors=True)
-os.makedirs(WORK)
-failures = []
-
-
-def expect(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what)
-    if not ok:
-        failures.append(what)
+fresh_folder(WORK)
 
 
 if CHECK == "synthetic":

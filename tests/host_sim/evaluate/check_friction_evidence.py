@@ -10,23 +10,16 @@ usage: check_friction_evidence.py synthetic|bad_input SOURCE_DIR WORK_DIR"""
 import csv
 import json
 import os
-import shutil
 import subprocess
 import sys
 
 import numpy as np
 
+from check_support import expect, failures, fresh_folder
+
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 SCRIPT = os.path.join(SOURCE, "host_sim", "evaluate", "friction_evidence.py")
-shutil.rmtree(WORK, ignore_errors=True)
-os.makedirs(WORK)
-failures = []
-
-
-def expect(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what)
-    if not ok:
-        failures.append(what)
+fresh_folder(WORK)
 
 
 def run(*args):

@@ -7,23 +7,16 @@ the script's excess_at_poses is checked against here.)
 usage: check_tune_loop_gate.py bad_input SOURCE_DIR WORK_DIR"""
 import json
 import os
-import shutil
 import subprocess
 import sys
 
 import numpy as np
 
+from check_support import expect, failures, fresh_folder
+
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 TUNE = os.path.join(SOURCE, "host_sim", "evaluate", "tune_loop_gate.py")
-shutil.rmtree(WORK, ignore_errors=True)
-os.makedirs(WORK)
-failures = []
-
-
-def expect(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what)
-    if not ok:
-        failures.append(what)
+fresh_folder(WORK)
 
 
 def tune(*args):

@@ -14,11 +14,12 @@
 usage: check_tune_tip_odometer.py CHECK SOURCE_DIR WORK_DIR"""
 import json
 import os
-import shutil
 import subprocess
 import sys
 
 import numpy as np
+
+from check_support import expect, failures, fresh_folder
 
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 TUNE = os.path.join(SOURCE, "host_sim", "evaluate", "tune_tip_odometer.py")
@@ -60,15 +61,7 @@ def tune(*args):
     return subprocess.run(["/usr/bin/python3", TUNE, *args], capture_output=True, text=True)
 
 
-shutil.rmtree(WORK, ignore_errors=True)
-os.makedirs(WORK)
-failures = []
-
-
-def expect(ok, what):
-    print(("ok: " if ok else "FAIL: ") + what)
-    if not ok:
-        failures.append(what)
+fresh_folder(WORK)
 
 
 if CHECK in ("exact_odometer", "drifting_odometer"):
