@@ -40,7 +40,10 @@ ConfigFault check_config(const Config& config, ReducedTablesFault& tables_fault)
         config.contact_local_iterations == 0U || config.contact_local_iterations > 64U) {
         return ConfigFault::contact_settings;
     }
-    if (!limits_valid(config.limits)) return ConfigFault::limits;
+    if (!limits_valid(config.limits) || config.force_blind_after_steps == 0U ||
+        config.force_blind_after_steps > 1000U) {
+        return ConfigFault::limits;
+    }
     if (tables_fault != ReducedTablesFault::none) return ConfigFault::tables;
     if (!AdvanceEfficiency<>::valid(config.efficiency) ||
         !SelfLockMonitor::valid(config.self_lock) ||
@@ -124,6 +127,17 @@ ContactForceLevel output_level(monitors::ContactForceLevel level) noexcept {
         case monitors::ContactForceLevel::normal: break;
     }
     return ContactForceLevel::normal;
+}
+
+/// Counts the stale force periods; true once there are force_blind_after_steps of them in a row
+/// (kinetics.hpp, "A stale force cell").
+bool force_blind(State& state, std::uint32_t faults) noexcept {
+    if ((faults & kFaultForceStale) == 0U) {
+        state.force_stale_steps = 0;
+    } else if (state.force_stale_steps < state.config.force_blind_after_steps) {
+        ++state.force_stale_steps;
+    }
+    return state.force_stale_steps >= state.config.force_blind_after_steps;
 }
 
 /// Tip velocity: mean over the ring (oldest to newest), 0 until it holds two samples.
@@ -222,6 +236,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     }
 
     // 3. The tip observer, the model evidence and the slack regressor: the published tip.
+    if (force_blind(state, faults)) faults |= kFaultForceBlind;
     TipObserver::Inputs observer_inputs{};
     observer_inputs.depth_mm = state.insertion_mm;
     observer_inputs.handle_force_N = state.handle_force_N;
@@ -244,6 +259,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         SlackRegressor::Inputs slack_inputs{};
         slack_inputs.depth_mm = state.insertion_mm;
         slack_inputs.handle_force_N = state.handle_force_N;
+        slack_inputs.force_fresh = (faults & kFaultForceStale) == 0U;
         slack_inputs.observer_slack_mm = state.insertion_mm - state.tip_observer.tip_mm;
         slack_inputs.period_s = config.period_s;
         regressed = SlackRegressor::step(*config.slack_trees, slack_inputs, state.slack);

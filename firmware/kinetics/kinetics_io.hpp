@@ -74,6 +74,10 @@ enum FaultFlag : std::uint32_t {
     kFaultDepthOutsideModel = 1U << 11U,
     kFaultConfig = 1U << 12U,        ///< init refused the configuration: no estimate
     kFaultMonitorInput = 1U << 13U,  ///< a monitor rejected its input (held its output)
+    /// The force cell has been stale for Config::force_blind_after_steps periods in a row or more:
+    /// the handle force is lost, the estimate runs on the depth and the force history up to the
+    /// cell's last valid reading (kinetics.hpp, "A stale force cell") until it returns.
+    kFaultForceBlind = 1U << 14U,
 };
 
 /// Contact state of a station (mirrors contact::ContactState).

@@ -91,7 +91,8 @@ SlackRegressor::Outputs SlackRegressor::step(const SlackTrees& trees, const Inpu
         const Q16_16 tau_s = Q16_16::from_raw(trees.average_tau_s_raw[k]);
         const std::int32_t alpha_raw = std::min(inputs.period_s / tau_s, Q16_16::from_int(1)).raw();
         out.features[kSlackForceEma1s + k] =
-            average(state.force_ema_q32[k], inputs.handle_force_N, alpha_raw);
+            inputs.force_fresh ? average(state.force_ema_q32[k], inputs.handle_force_N, alpha_raw)
+                               : saturated(state.force_ema_q32[k] >> 16);
         out.features[kSlackSpeedEma1s + k] =
             average(state.speed_ema_q32[k], speed_mm_per_s, alpha_raw);
     }

@@ -116,8 +116,11 @@ struct SlackRegressor {
         std::int64_t speed_ema_q32[kSlackAverages]{};
     };
     struct Inputs {
-        Q16_16 depth_mm{};           ///< validated, rate-limited insertion depth
-        Q16_16 handle_force_N{};     ///< validated (the last valid value while stale)
+        Q16_16 depth_mm{};        ///< validated, rate-limited insertion depth
+        Q16_16 handle_force_N{};  ///< validated (the last valid value while stale)
+        /// false while the force cell is stale: the force averages are held, not fed the held
+        /// reading, so they resume from what the cell last said when it returns.
+        bool force_fresh{true};
         Q16_16 observer_slack_mm{};  ///< depth - the tip observer's tip
         Q16_16 period_s{};           ///< (0, 1] s
     };

@@ -35,38 +35,19 @@ import sys
 
 import numpy as np
 
+from case_columns import BadInput, columns, complete_summary
+
 STATIONS = 12  # firmware/kinetics: the reduced model's stations
 SMOOTH_S = 0.1
 MIN_EACH_WAY_S = 1.0
 
 
-class BadInput(Exception):
-    pass
-
-
-def columns(path, names):
-    """The named columns of a CSV as float arrays (empty cells: NaN)."""
-    with open(path, newline="") as f:
-        reader = csv.reader(f)
-        header = next(reader, None)
-        if header is None:
-            raise BadInput(f"{path}: empty")
-        missing = [n for n in names if n not in header]
-        if missing:
-            raise BadInput(f"{path}: no column {', '.join(missing)}")
-        index = [header.index(n) for n in names]
-        rows = [[float(r[i]) if i < len(r) and r[i] != "" else np.nan for i in index] for r in reader]
-    return {n: np.array([r[k] for r in rows]) for k, n in enumerate(names)}
-
-
 def fit_case(folder, min_speed):
     """(style, true mu, mu_hat, c, seconds used) of a complete case, or None if it is not one."""
+    summary = complete_summary(folder)
+    if summary is None:
+        return None
     summary_path = os.path.join(folder, "summary.json")
-    if not os.path.isfile(summary_path):
-        return None
-    summary = json.load(open(summary_path))
-    if summary.get("status") != "complete":
-        return None
     try:
         mu = float(summary["patient"]["mechanics"]["friction_coefficient"])
     except (KeyError, TypeError, ValueError):

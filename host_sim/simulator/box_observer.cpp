@@ -6,12 +6,12 @@
 
 namespace scopekin::host_sim {
 
-const std::array<const char*, 14>& kinetics_fault_names() {
-    static const std::array<const char*, 14> names{
+const std::array<const char*, 15>& kinetics_fault_names() {
+    static const std::array<const char*, 15> names{
         "insertion_stale", "insertion_range",  "insertion_jump", "force_stale",
         "force_range",     "torque_stale",     "torque_range",   "roll_stale",
         "roll_range",      "contact_residual", "saturation",     "depth_outside_model",
-        "config",          "monitor_input"};
+        "config",          "monitor_input",    "force_blind"};
     return names;
 }
 

@@ -34,8 +34,8 @@ struct BoxObservation {
     double peak_contact_time_s = 0;
     double peak_contact_path_mm = 0;
     unsigned peak_contact_station = 0;
-    std::array<std::uint64_t, 14> fault_periods{};  ///< periods with kinetics fault bit k set
-    std::array<double, 14> fault_first_s{};         ///< time of the first such period [s] (if any)
+    std::array<std::uint64_t, 15> fault_periods{};  ///< periods with kinetics fault bit k set
+    std::array<double, 15> fault_first_s{};         ///< time of the first such period [s] (if any)
     std::uint64_t estimate_invalid_periods = 0;
     std::array<std::uint64_t, 16> box_fault_periods{};  ///< periods with BoxFault bit k set
     std::array<double, 16> box_fault_first_s{};
@@ -52,7 +52,7 @@ struct BoxObservation {
 };
 
 /// Names of the kinetics fault bits (kinetics_io.hpp FaultFlag), bit k.
-const std::array<const char*, 14>& kinetics_fault_names();
+const std::array<const char*, 15>& kinetics_fault_names();
 /// Names of the box's fault bits (messages/box_faults.hpp BoxFault, TrackerFault), bit k
 /// ("bit_15" for a bit without a name).
 const std::array<const char*, 16>& box_fault_names();

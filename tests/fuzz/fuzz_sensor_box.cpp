@@ -69,7 +69,7 @@ using namespace scopekin::messages;
 using scopekin::fuzz::Script;
 
 constexpr std::uint16_t kAllBoxFaults = (1U << 15U) - 1U;
-constexpr std::uint32_t kAllKineticFaults = (1U << 14U) - 1U;
+constexpr std::uint32_t kAllKineticFaults = (1U << 15U) - 1U;
 constexpr std::size_t kMaxPeriods = 48;
 
 /// The box and its world: the loopback wire and serial line on a simulated clock.

@@ -32,6 +32,8 @@ KINETIC_INSERTION_STALE, KINETIC_FORCE_STALE = 1 << 0, 1 << 3
 KINETIC_TORQUE_STALE, KINETIC_ROLL_STALE = 1 << 5, 1 << 7
 KINETIC_STALE = (KINETIC_INSERTION_STALE | KINETIC_FORCE_STALE | KINETIC_TORQUE_STALE
                  | KINETIC_ROLL_STALE)
+# ... and the force cell lost: stale 20 periods in a row (protocol 1.4)
+KINETIC_FORCE_BLIND = 1 << 14
 # BoxCounters.CounterIndex (protocol::BoxCounterIndex)
 COUNTER_INDEX = {"can_received": 0, "can_dropped": 1, "can_error_frames": 2, "can_bus_off": 3,
                  "can_send_failures": 4, "serial_frames": 10, "period_overruns": 13}

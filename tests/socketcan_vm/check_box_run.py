@@ -17,7 +17,9 @@ At any speed:
 * the protocol: a KineticEstimate, ContactSummary, Alarms, EstimateEvidence and BoxCounters frame
   per period, a valid estimate that follows the advance;
 * the force cell's 0.3 s silence (found by frame count: a starved canplayer leaves other pauses,
-  counted): the stale bit in a BoxStatus, InputsStale on the estimate, and the bits cleared after
+  counted): the stale bit in a BoxStatus, InputsStale on the estimate, the cell reported lost
+  (KineticFaults bit 14, protocol 1.4) when the silence on the bus lasted 0.15 s or more, and the
+  bits cleared after
   the cell's return; within 3 periods each (counted in KineticEstimate frames, i.e. box periods,
   not in wall time) where the box ran no late period within 20 periods of the silence's edges
   (a box that fell behind reads the returning samples late: rightly not fresh, flagged as a
@@ -48,7 +50,7 @@ import canmatrix.formats
 
 from box_logs import (
     COUNTER_INDEX, COUNTERS_ID, DRIVER_FORCE_STALE, DRIVER_PERIOD_OVERRUN, DRIVER_RECEIVE_DROPPED,
-    ENCODER_ID, ESTIMATE_ID, FORCE_ID, KINETIC_FORCE_STALE, KINETIC_TORQUE_STALE, STATION_ID,
+    ENCODER_ID, ESTIMATE_ID, FORCE_ID, KINETIC_FORCE_BLIND, KINETIC_FORCE_STALE, KINETIC_TORQUE_STALE, STATION_ID,
     STATUS_ID, SUMMARY_ID, ALARMS_ID, EVIDENCE_ID, TRACKER_STALE, FaultLog, check_flags_account, decode_box_frames,
     longest_lag_periods, read_candump, read_marks)
 
@@ -174,6 +176,10 @@ def main():
                 break
         expect(any(v["InputsStale"] == 1 for i, d, v in decoded if d == ESTIMATE_ID and last_before < i < first_after),
                "estimate flagged InputsStale (held) during the silence")
+        if silence_on_bus_s >= 0.15:  # 20 periods of 5 ms and some margin
+            expect(any(int(v["KineticFaults"]) & KINETIC_FORCE_BLIND
+                       for i, d, v in decoded if d == STATUS_ID and last_before < i <= first_after),
+                   f"the force cell reported lost (KineticFaults bit 14) in a {silence_on_bus_s:.2f} s silence")
         periods_seen = 0
         for index, ident, values in decoded:
             if index < first_after:

@@ -118,6 +118,48 @@ SCOPEKIN_TEST(KineticsStep, StaleInsertionHoldsTheDepthAndRecovers) {
     SCOPEKIN_EXPECT_EQ(g_out.fault_flags, std::uint32_t{0});
 }
 
+/// Tips published while the force cell is stale (StaleForce... below).
+Q16_16 g_stale_tips[60];
+
+/// From 200 mm, 60 steps advancing 1 mm each with the force cell stale, its input carrying
+/// `stale_force_N`; fills g_stale_tips and checks the fault bits of each step.
+bool advance_with_a_stale_force_cell(int stale_force_N) {
+    advance_to(200);
+    bool flags_right = true;
+    for (int k = 1; k <= 60; ++k) {
+        kin::Inputs in = sample(200 + k, kin::kInsertion | kin::kRoll);
+        in.handle_force_N = Q16_16::from_int(stale_force_N);
+        kin::step(in, g_state, g_out);
+        g_stale_tips[k - 1] = g_out.tip_path_mm;
+        // Stale from the first period; lost (kFaultForceBlind) from the 20th in a row.
+        flags_right = flags_right && has(g_out.fault_flags, kin::kFaultForceStale) &&
+                      has(g_out.fault_flags, kin::kFaultForceBlind) == (k >= 20);
+    }
+    return flags_right;
+}
+
+SCOPEKIN_TEST(KineticsStep, AStaleForceCellIsFlaggedLostAfter20PeriodsAndSaysNothing) {
+    SCOPEKIN_EXPECT_TRUE(advance_with_a_stale_force_cell(2));
+    Q16_16 first_run[60];
+    for (int k = 0; k < 60; ++k)
+        first_run[k] = g_stale_tips[k];
+    // What a stale input carries is not a measurement: 80 N instead of 2 N changes nothing.
+    SCOPEKIN_EXPECT_TRUE(advance_with_a_stale_force_cell(80));
+    for (int k = 0; k < 60; ++k)
+        SCOPEKIN_EXPECT_EQ(g_stale_tips[k].raw(), first_run[k].raw());
+    // The tip still follows the depth: the hand advanced 60 mm.
+    SCOPEKIN_EXPECT_TRUE(g_stale_tips[59] - g_stale_tips[0] > Q16_16::from_int(30));
+    // The first fresh sample clears both bits.
+    kin::step(sample(261), g_state, g_out);
+    SCOPEKIN_EXPECT_TRUE(!has(g_out.fault_flags, kin::kFaultForceStale));
+    SCOPEKIN_EXPECT_TRUE(!has(g_out.fault_flags, kin::kFaultForceBlind));
+    // A threshold of 0 periods (lost before it is stale) is refused.
+    kin::Config never = kin::default_config();
+    never.force_blind_after_steps = 0;
+    kin::init(never, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::limits);
+}
+
 SCOPEKIN_TEST(KineticsStep, OneMetreJumpIsRateLimitedFlaggedAndRecovered) {
     advance_to(200);
     const Q16_16 tip = g_out.observer_tip_path_mm;

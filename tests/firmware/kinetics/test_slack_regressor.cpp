@@ -125,6 +125,30 @@ SCOPEKIN_TEST(SlackRegressor, AveragesFollowTheirClosedForms) {
                               speed * (1.0 - std::pow(1.0 - alpha20, steps)), 0.01));
 }
 
+SCOPEKIN_TEST(SlackRegressor, AStaleForceHoldsTheForceAveragesWhileTheSpeedsGoOn) {
+    // 7 N for 100 steps, then the cell is stale for 300 steps while the hand still advances 1 mm
+    // per step: whatever value the stale input carries (here 40 N), every force average stays at
+    // the 7 N the cell last said, and the 1 s speed average keeps its closed form
+    // 200 (1 - (1 - alpha)^n) mm/s over all 401 steps (as in AveragesFollowTheirClosedForms).
+    const SlackTrees trees = hand_built();
+    SlackRegressor::State state{};
+    SlackRegressor::Outputs out{};
+    for (int n = 0; n <= 100; ++n)
+        out = SlackRegressor::step(trees, at(20 + n, Q16_16::from_int(7)), state);
+    for (int n = 101; n <= 400; ++n) {
+        SlackRegressor::Inputs stale = at(20 + n, Q16_16::from_int(40));
+        stale.force_fresh = false;
+        out = SlackRegressor::step(trees, stale, state);
+    }
+    for (std::size_t k = 0; k < kin::kSlackAverages; ++k)
+        SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackForceEma1s + k].raw(), 7 * kOne);
+    const double alpha = 328.0 / 65536.0;
+    const double speed = 1.0 / (328.0 / 65536.0);
+    SCOPEKIN_EXPECT_TRUE(near(out.features[kin::kSlackSpeedEma1s],
+                              speed * (1.0 - std::pow(1.0 - alpha, 400)), 0.01));
+    SCOPEKIN_EXPECT_EQ(out.features[kin::kSlackAdvanced].raw(), 400 * kOne);
+}
+
 SCOPEKIN_TEST(SlackRegressor, TheUncertaintyIsItsLinearLaw) {
     // Depth 150 mm, force 11 N: slack 52 mm; sigma = 3 + 52 / 4 + 40 x 0.15 = 22 mm.
     const SlackTrees trees = hand_built();
