@@ -14,11 +14,10 @@ Usage: check_alarm_speed.py CHECK SOURCE_DIR WORK_DIR
 import csv
 import json
 import os
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_support import expect, failures, fresh_folder  # noqa: E402
+from check_support import expect, failures, fresh_folder, run_script  # noqa: E402
 
 CHECK, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 SCRIPT = os.path.join(SOURCE, "host_sim", "evaluate", "alarm_speed.py")
@@ -57,7 +56,7 @@ def write_case(root, name, box_column="box_loop_alarm"):
 
 
 def run(*args):
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True)
+    return run_script(SCRIPT, *args)
 
 
 if CHECK == "synthetic":

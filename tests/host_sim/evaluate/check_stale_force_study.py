@@ -14,11 +14,10 @@ Usage: check_stale_force_study.py CHECK SOURCE_DIR WORK_DIR
 import csv
 import json
 import os
-import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from check_support import expect, failures, fresh_folder  # noqa: E402
+from check_support import expect, failures, fresh_folder, run_script  # noqa: E402
 
 
 def fake_box(recording, out):
@@ -75,7 +74,7 @@ def write_case(root, name):
 
 
 def run(*args):
-    return subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True)
+    return run_script(SCRIPT, *args)
 
 
 if CHECK == "synthetic":

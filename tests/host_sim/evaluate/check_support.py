@@ -1,7 +1,10 @@
-"""What the checks of host_sim/evaluate's scripts share: a fresh work folder, and `expect`, which
-prints each check and keeps the failed ones in `failures` (the script exits non-zero if any)."""
+"""What the checks of host_sim/evaluate's scripts share: a fresh work folder, `expect`, which
+prints each check and keeps the failed ones in `failures` (the script exits non-zero if any), and
+`run_script`, which runs the script under check."""
 import os
 import shutil
+import subprocess
+import sys
 
 failures = []
 
@@ -16,3 +19,8 @@ def expect(ok, what):
     print(("ok: " if ok else "FAIL: ") + what)
     if not ok:
         failures.append(what)
+
+
+def run_script(script, *args):
+    """Runs a Python script with this interpreter; its CompletedProcess (text output captured)."""
+    return subprocess.run([sys.executable, script, *args], capture_output=True, text=True)
