@@ -26,7 +26,8 @@ def run(*args):
     return subprocess.run(["/usr/bin/python3", SCRIPT, *args], capture_output=True, text=True)
 
 
-def write_case(root, name, mu, back_and_forth=True, stations=True, seed=0, coulomb=True, style="hurried_trainee"):
+def write_case(root, name, mu, back_and_forth=True, stations=True, seed=0, coulomb=True, style="hurried_trainee",
+               start_mm=100.0):
     folder = os.path.join(root, "cases", name)
     os.makedirs(folder)
     t = 0.005 * np.arange(1, 6001)  # 30 s
@@ -35,7 +36,7 @@ def write_case(root, name, mu, back_and_forth=True, stations=True, seed=0, coulo
         speed = np.where(phase < 2.0, 20.0, -20.0)
     else:
         speed = np.full(t.size, 20.0)
-    depth = 100.0 + np.cumsum(speed) * 0.005
+    depth = start_mm + np.cumsum(speed) * 0.005
     normal0 = 10.0 + 5.0 * np.sin(t)  # N: the model's station forces, varying with the depth
     normal1 = 4.0 + 0.02 * depth
     rng = np.random.default_rng(seed)
@@ -56,13 +57,18 @@ def write_case(root, name, mu, back_and_forth=True, stations=True, seed=0, coulo
         w.writerow(["time_s"] + names)
         for k in range(t.size):
             w.writerow([t[k]] + ([normal0[k], normal1[k]] + [0.0] * 10 if stations else []))
+    # The advancing push index's closed form: Coulomb's push, mu N + 2 N, over the advancing periods
+    # (the script's speed, smoothed over 0.1 s, is above 3 mm/s on all but the reversals' edges).
+    advancing = speed > 0
+    return float(np.mean(mu * (normal0 + normal1)[advancing] + 2.0))
 
 
 if CHECK == "synthetic":
     root = os.path.join(WORK, "eval")
     mus = [0.1, 0.2, 0.3, 0.4]
-    for i, mu in enumerate(mus):
-        write_case(root, f"p{i}-trainee-s1", mu, seed=i)
+    pushes = {}
+    for i, mu in enumerate(mus):  # from 400 mm: inside the push index's 300-900 mm
+        pushes[f"p{i}-trainee-s1"] = write_case(root, f"p{i}-trainee-s1", mu, seed=i, start_mm=400.0)
     write_case(root, "p9-trainee-s1", 0.25, back_and_forth=False)
     write_case(root, "p8-expert-s1", 0.3, coulomb=False, style="careful_expert")
     out = os.path.join(WORK, "out")
@@ -74,11 +80,19 @@ if CHECK == "synthetic":
         got = fitted.get(f"p{i}-trainee-s1")
         expect(got is not None and abs(got - mu) < 0.01, f"mu {mu} fitted back within 0.01: {got}")
     expect("p9-trainee-s1" not in fitted, "a case that only advances is not scored")
+    index = {r["case"]: r["advancing_push_N"] for r in rows}
+    for name, expected in pushes.items():
+        got = float(index[name]) if index.get(name) else None
+        expect(got is not None and abs(got - expected) < 0.1,
+               f"{name}: advancing push {got} N, Coulomb's {expected:.2f} N")
+    expect(index.get("p8-expert-s1") == "", "no push index below 300 mm")
     got = fitted.get("p8-expert-s1")
     expect(got is not None and abs(got) < 0.01,
            f"a load that does not reverse with the hand is not friction: fitted {got}")
     report = json.load(open(os.path.join(out, "friction_evidence.json")))
     expect(abs(report["by_style"]["hurried_trainee"]["spearman"] - 1.0) < 1e-9, "ranked perfectly")
+    expect(abs(report["by_style"]["hurried_trainee"]["spearman_advancing_push"] - 1.0) < 1e-9,
+           "the push index ranks them perfectly too")
     expect(os.path.isfile(os.path.join(out, "friction_evidence.png")), "the picture is drawn")
 elif CHECK == "bad_input":
     os.makedirs(os.path.join(WORK, "empty", "cases"))
