@@ -18,7 +18,7 @@ At any speed:
   per period, a valid estimate that follows the advance;
 * the force cell's 0.3 s silence (found by frame count: a starved canplayer leaves other pauses,
   counted): the stale bit in a BoxStatus, InputsStale on the estimate, the cell reported lost
-  (KineticFaults bit 14, protocol 1.4) when the silence on the bus lasted 0.15 s or more, and the
+  (KineticFaults bit 14, protocol 1.4) where the box ran 25 periods or more in the silence, and the
   bits cleared after
   the cell's return; within 3 periods each (counted in KineticEstimate frames, i.e. box periods,
   not in wall time) where the box ran no late period within 20 periods of the silence's edges
@@ -176,10 +176,14 @@ def main():
                 break
         expect(any(v["InputsStale"] == 1 for i, d, v in decoded if d == ESTIMATE_ID and last_before < i < first_after),
                "estimate flagged InputsStale (held) during the silence")
-        if silence_on_bus_s >= 0.15:  # 20 periods of 5 ms and some margin
+        # Lost after 20 stale box periods: judged where the box ran 25 or more periods in the
+        # silence (one KineticEstimate each; a box that fell behind, e.g. under AddressSanitizer,
+        # may run fewer).
+        silent_periods = sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and last_before < i < first_after)
+        if silent_periods >= 25:
             expect(any(int(v["KineticFaults"]) & KINETIC_FORCE_BLIND
                        for i, d, v in decoded if d == STATUS_ID and last_before < i <= first_after),
-                   f"the force cell reported lost (KineticFaults bit 14) in a {silence_on_bus_s:.2f} s silence")
+                   f"the force cell reported lost (KineticFaults bit 14) after {silent_periods} silent periods")
         periods_seen = 0
         for index, ident, values in decoded:
             if index < first_after:
