@@ -182,10 +182,15 @@ struct ReducedModelHeader {
     std::array<ReducedSegment<Scalar>, kMaxReducedSegments> segments{};
 };
 
-/// What a Tables type provides (duck-typed, no virtual calls):
+/// What a Tables type provides (duck-typed, no virtual calls), in the record layout above:
 ///   const ReducedModelHeader<Scalar>& header() const;
-///   Scalar value(std::size_t knot, std::size_t index_in_knot_record) const;
+///   Scalar station_value(std::size_t knot, std::size_t station, std::size_t value) const;
+///       value < kStationSlid: p, g, f_n, f_t, f_s of the station at the knot
+///   Scalar slid(std::size_t knot, std::size_t station) const;  ///< kStationSlid: -1, 0 or +1
+///   Scalar knot_value(std::size_t knot, std::size_t value) const;  ///< ReducedKnotValue
 ///   Scalar compliance(std::size_t record, std::size_t index_in_compliance_record) const;
+/// (How a type stores them is its own: the firmware's Q16.16 tables keep the slip signs apart,
+/// one byte each, reduced_tables.hpp.)
 
 template <typename Scalar, std::size_t Stations>
 struct ReducedState {
@@ -389,26 +394,22 @@ ReducedStepReport<Scalar, Stations> reduced_step(
     std::array<Scalar, Stations> path{};
     std::array<Scalar, Stations> gap{};
     for (std::size_t j = 0; j < active; ++j) {  // bound: Stations
-        const std::size_t base = j * kStationValueCount;
-        path[j] = detail::lerp(tables.value(knot, base + kStationPath),
-                               tables.value(next, base + kStationPath), weight);
-        gap[j] = detail::lerp(tables.value(knot, base + kStationGap),
-                              tables.value(next, base + kStationGap), weight);
+        path[j] = detail::lerp(tables.station_value(knot, j, kStationPath),
+                               tables.station_value(next, j, kStationPath), weight);
+        gap[j] = detail::lerp(tables.station_value(knot, j, kStationGap),
+                              tables.station_value(next, j, kStationGap), weight);
         for (std::size_t c = 0; c < 3U; ++c) {
             state.reference_force_N[j][c] =
-                detail::lerp(tables.value(knot, base + kStationForceN + c),
-                             tables.value(next, base + kStationForceN + c), weight);
+                detail::lerp(tables.station_value(knot, j, kStationForceN + c),
+                             tables.station_value(next, j, kStationForceN + c), weight);
         }
     }
-    const std::size_t knot_base = k_stations * kStationValueCount;
     for (std::size_t c = 0; c < 3U; ++c) {
-        state.tip_position_mm[c] =
-            detail::lerp(tables.value(knot, knot_base + kKnotTipX + c),
-                         tables.value(next, knot_base + kKnotTipX + c), weight);
+        state.tip_position_mm[c] = detail::lerp(tables.knot_value(knot, kKnotTipX + c),
+                                                tables.knot_value(next, kKnotTipX + c), weight);
     }
-    state.training_handle_force_N =
-        detail::lerp(tables.value(knot, knot_base + kKnotHandleForce),
-                     tables.value(next, knot_base + kKnotHandleForce), weight);
+    state.training_handle_force_N = detail::lerp(tables.knot_value(knot, kKnotHandleForce),
+                                                 tables.knot_value(next, kKnotHandleForce), weight);
     auto& problem = state.problem;
     problem.contact_count = active;
     problem.block_diagonal = true;              // the off-diagonal blocks are never read
@@ -451,7 +452,7 @@ ReducedStepReport<Scalar, Stations> reduced_step(
     for (std::size_t a = 0; a < active; ++a) {  // bound: Stations
         const contact::ContactVec3<Scalar>& f_ref = state.reference_force_N[a];
         const Scalar tangential = T::hypot(f_ref[1], f_ref[2]);
-        const Scalar slip_sign = tables.value(knot, a * kStationValueCount + kStationSlid);
+        const Scalar slip_sign = tables.slid(knot, a);
         const bool slid = !(slip_sign == T::zero());
         training_slid[a] = slid;
         // A stretch whose resultant pulls (f_n < 0: its nodes touch opposite walls) or lies far

@@ -43,6 +43,9 @@ std::uint32_t reduced_tables_checksum(const ReducedTablesQ16& tables) noexcept {
          ++i) {  // bound: knot_value_count (flash size)
         hash = fnv_word(hash, static_cast<std::uint32_t>(tables.knot_values[i]));
     }
+    for (std::size_t i = 0; i < tables.slid_value_count; ++i) {  // bound: slid_value_count
+        hash = fnv_word(hash, static_cast<std::uint32_t>(std::int32_t{tables.slid_values[i]}));
+    }
     for (std::size_t i = 0; i < tables.compliance_value_count;
          ++i) {  // bound: compliance_value_count
         hash = fnv_word(hash, static_cast<std::uint32_t>(tables.compliance_values[i]));
@@ -53,6 +56,7 @@ std::uint32_t reduced_tables_checksum(const ReducedTablesQ16& tables) noexcept {
 ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables,
                                         std::size_t station_capacity) noexcept {
     if (tables == nullptr || tables->knot_values == nullptr || tables->knot_value_count == 0U ||
+        tables->slid_values == nullptr || tables->slid_value_count == 0U ||
         tables->compliance_values == nullptr || tables->compliance_value_count == 0U) {
         return ReducedTablesFault::missing;
     }
@@ -73,9 +77,14 @@ ReducedTablesFault check_reduced_tables(const ReducedTablesQ16* tables,
         knots += s.knots;
         records += (s.knots - 1U) / h.compliance_every + 1U;
     }
-    if (tables->knot_value_count != knots * reduced_knot_size(h.stations) ||
+    if (tables->knot_value_count != knots * reduced_stored_knot_size(h.stations) ||
+        tables->slid_value_count != knots * h.stations ||
         tables->compliance_value_count != records * reduced_compliance_size(h.stations)) {
         return ReducedTablesFault::bad_shape;
+    }
+    for (std::size_t i = 0; i < tables->slid_value_count; ++i) {  // bound: slid_value_count
+        if (tables->slid_values[i] < -1 || tables->slid_values[i] > 1)
+            return ReducedTablesFault::bad_shape;
     }
     if (h.station_spacing_mm <= Q16_16{} || h.friction <= Q16_16{} ||
         h.segments[0].direction != 1 || h.segments[0].kind != kSegmentTravel) {

@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
             std::cerr << "reduced tables: the same data in double -> " << argv[3] << "\n";
         }
         std::cerr << "reduced tables: " << raw.knot_values.size() + raw.compliance_values.size()
-                  << " values, checksum " << raw.checksum << " -> " << out.string() << "\n";
+                  << " Q16.16 values and " << raw.slid_values.size() << " slip signs, checksum "
+                  << raw.checksum << " -> " << out.string() << "\n";
         return 0;
     } catch (const std::exception& e) {
         std::cerr << "scopekin_generate_reduced_tables: " << e.what() << "\n";

@@ -59,6 +59,15 @@ public:
 
     const kinetics::ReducedModelHeader<double>& header() const { return head; }
     double value(std::size_t knot, std::size_t index) const { return knots[knot][index]; }
+    double station_value(std::size_t knot, std::size_t station, std::size_t v) const {
+        return knots[knot][station * kinetics::kStationValueCount + v];
+    }
+    double slid(std::size_t knot, std::size_t station) const {
+        return station_value(knot, station, kinetics::kStationSlid);
+    }
+    double knot_value(std::size_t knot, std::size_t v) const {
+        return knots[knot][head.stations * kinetics::kStationValueCount + v];
+    }
     double compliance(std::size_t record, std::size_t index) const {
         return compliances[record][index];
     }

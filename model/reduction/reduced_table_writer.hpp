@@ -1,6 +1,7 @@
 #pragma once
 // reduced_table_writer — the firmware's Q16.16 constant tables from the reduced model's double
-// data: every value rounded to nearest (Q16.16 raw = round(x * 2^16)), the FNV-1a checksum of
+// data: every value rounded to nearest (Q16.16 raw = round(x * 2^16)), the slip signs apart as
+// int8 (reduced_tables.hpp, "Format"), the FNV-1a checksum of
 // firmware/kinetics/reduced_tables.hpp, and a C++ source file that defines
 // scopekin::kinetics::default_reduced_tables() (declared in kinetics/default_reduced_tables.hpp).
 // The output depends only on the data: the same training runs give the same bytes.
@@ -15,8 +16,10 @@ namespace scopekin::model {
 
 struct ReducedTablesRaw {
     kinetics::ReducedModelHeader<std::int32_t> head;  ///< Q16.16 raw (counts and directions plain)
-    std::vector<std::int32_t> knot_values;            ///< knot records one after the other
-    std::vector<std::int32_t> compliance_values;      ///< compliance records one after the other
+    std::vector<std::int32_t>
+        knot_values;                       ///< knot records without slip signs, one after the other
+    std::vector<std::int8_t> slid_values;  ///< the slip signs, [knot][station]
+    std::vector<std::int32_t> compliance_values;  ///< compliance records one after the other
     std::uint32_t checksum = 0;
 };
 

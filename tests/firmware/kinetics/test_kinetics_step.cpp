@@ -14,6 +14,7 @@ namespace kin = scopekin::kinetics;
 // Static: State holds the contact problem (a few KiB), too large for a small test stack.
 kin::State g_state;
 kin::Outputs g_out;
+std::int8_t g_signs[32768];  // a copy of the tables' slip signs to damage (static: 17 KB)
 
 kin::Inputs sample(int insertion_mm, std::uint8_t fresh = kin::kAllInputSignals) {
     kin::Inputs in{};
@@ -71,6 +72,24 @@ SCOPEKIN_TEST(ReducedTables, DamagedOrMismatchedTablesAreRefused) {
     kin::ReducedTablesQ16 overlapping = good;
     overlapping.head.segments[1].first_knot -= 1U;
     SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&overlapping, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_shape);
+    // The slip signs (one byte each, reduced_tables.hpp "Format"): missing, one short, and a
+    // sign that is not -1, 0 or +1.
+    kin::ReducedTablesQ16 no_signs = good;
+    no_signs.slid_values = nullptr;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&no_signs, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::missing);
+    kin::ReducedTablesQ16 short_signs = good;
+    short_signs.slid_value_count -= 1U;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&short_signs, kin::kStationCapacity) ==
+                         kin::ReducedTablesFault::bad_shape);
+    SCOPEKIN_EXPECT_TRUE(good.slid_value_count <= sizeof(g_signs));
+    for (std::size_t i = 0; i < good.slid_value_count; ++i)
+        g_signs[i] = good.slid_values[i];
+    g_signs[good.slid_value_count / 2U] = 2;
+    kin::ReducedTablesQ16 bad_sign = good;
+    bad_sign.slid_values = g_signs;
+    SCOPEKIN_EXPECT_TRUE(kin::check_reduced_tables(&bad_sign, kin::kStationCapacity) ==
                          kin::ReducedTablesFault::bad_shape);
 }
 

@@ -46,13 +46,13 @@ kin::Outputs g_out;
 Q16_16 training_force_at(int depth_mm) {
     const kin::ReducedTablesQ16& tables = kin::default_reduced_tables();
     const auto& head = tables.header();
-    const std::size_t force = head.stations * kin::kStationValueCount + kin::kKnotHandleForce;
-    if (depth_mm < 752) return tables.value(static_cast<std::size_t>(depth_mm - 20), force);
+    const std::size_t force = kin::kKnotHandleForce;
+    if (depth_mm < 752) return tables.knot_value(static_cast<std::size_t>(depth_mm - 20), force);
     const std::size_t knot =
         head.segments[3].first_knot + static_cast<std::size_t>(depth_mm - 752) / 2U;
-    const Q16_16 a = tables.value(knot, force);
+    const Q16_16 a = tables.knot_value(knot, force);
     if (depth_mm % 2 == 0) return a;
-    return a + Q16_16::from_ratio(1, 2) * (tables.value(knot + 1U, force) - a);
+    return a + Q16_16::from_ratio(1, 2) * (tables.knot_value(knot + 1U, force) - a);
 }
 
 /// One kinetics step at `depth_mm` with the handle force `force_N`.
