@@ -236,11 +236,12 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
     }
 
     // 3. The tip observer, the model evidence and the slack regressor: the published tip.
+    const bool force_fresh = (faults & kFaultForceStale) == 0U;
     if (force_blind(state, faults)) faults |= kFaultForceBlind;
     TipObserver::Inputs observer_inputs{};
     observer_inputs.depth_mm = state.insertion_mm;
     observer_inputs.handle_force_N = state.handle_force_N;
-    observer_inputs.force_fresh = (faults & kFaultForceStale) == 0U;
+    observer_inputs.force_fresh = force_fresh;
     observer_inputs.period_s = config.period_s;
     TipObserver::Outputs observed =
         TipObserver::step(config.tip_observer, observer_inputs, state.tip_observer);
@@ -259,7 +260,7 @@ void step(const Inputs& inputs, State& state, Outputs& outputs) noexcept {
         SlackRegressor::Inputs slack_inputs{};
         slack_inputs.depth_mm = state.insertion_mm;
         slack_inputs.handle_force_N = state.handle_force_N;
-        slack_inputs.force_fresh = (faults & kFaultForceStale) == 0U;
+        slack_inputs.force_fresh = force_fresh;
         slack_inputs.observer_slack_mm = state.insertion_mm - state.tip_observer.tip_mm;
         slack_inputs.period_s = config.period_s;
         regressed = SlackRegressor::step(*config.slack_trees, slack_inputs, state.slack);
