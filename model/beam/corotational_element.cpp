@@ -27,6 +27,15 @@ CorotationalReference make_corotational_reference(const BeamSection& section,
     return ref;
 }
 
+Vec7 rest_curvature_deformation(const Eigen::Vector3d& curvature_local_per_mm, double length_mm) {
+    Eigen::Vector3d bend = curvature_local_per_mm;
+    bend.x() = 0.0;
+    Vec7 rest = Vec7::Zero();
+    rest.segment<3>(1) = -0.5 * length_mm * bend;
+    rest.segment<3>(4) = 0.5 * length_mm * bend;
+    return rest;
+}
+
 namespace {
 
 using Mat3x9 = Eigen::Matrix<double, 3, 9, Eigen::RowMajor>;  // row-major: row operations vectorise
@@ -288,7 +297,7 @@ void corotational_response_reduced(const CorotationalReference& ref, const Eigen
     spin_b.block<3, 3>(0, 6) += frame_t;
     b.block<3, 9>(1, 0).noalias() = t_inv_a * spin_a;
     b.block<3, 9>(4, 0).noalias() = t_inv_b * spin_b;
-    out.local_force.noalias() = ref.local_stiffness * out.deformation;
+    out.local_force.noalias() = ref.local_stiffness * (out.deformation - ref.rest_deformation);
     // B^T f_l through a column-major copy of B: the same summation order as the 12-column
     // product it replaces, so converged solutions keep their last digits.
     const Eigen::Matrix<double, 7, 9> b_columns = b;

@@ -28,7 +28,17 @@ struct CorotationalReference {
     Eigen::Matrix3d frame = Eigen::Matrix3d::Identity();  ///< E0: reference local frame (Eq. 4.3)
     Mat7 local_stiffness;  ///< Eq. (4.2) restricted to the 7 deformational DOFs [u2, th_a, th_b]
     Mat12 local_mass;      ///< Eq. (4.5), local frame
+    /// The deformation at which the element carries no force (zero: straight and unstrained).
+    /// A bending section angulated by its wires holds a curvature: rest_curvature_deformation.
+    Vec7 rest_deformation = Vec7::Zero();
 };
+
+/// The rest deformation of an element of length `length_mm` bent to the uniform curvature
+/// `curvature_local_per_mm` (local components [1/mm]; its axial part, a twist, is dropped): the
+/// arc's end tangents turn by -kappa L / 2 and +kappa L / 2 about the bending axis relative to its
+/// chord. The chord keeps its length (as under an end moment, the element's chord stands for its
+/// arc): a section bent so and pulled straight again is as long as before.
+Vec7 rest_curvature_deformation(const Eigen::Vector3d& curvature_local_per_mm, double length_mm);
 
 CorotationalReference make_corotational_reference(const BeamSection& section,
                                                   const Eigen::Vector3d& node_a_mm,

@@ -177,6 +177,19 @@ void ScopeBeam::assemble(Assembly& out, bool with_tangent, BlockTridiagonalMatri
     }
 }
 
+void ScopeBeam::set_rest_curvature(std::size_t element, const Eigen::Vector3d& curvature_per_mm) {
+    CorotationalReference& ref = references_.at(element);
+    if (curvature_per_mm.isZero(0.0)) {
+        ref.rest_deformation.setZero();
+        return;
+    }
+    const Eigen::Matrix3d frame =
+        corotational_frame(ref, positions_[element], rotations_[element], positions_[element + 1],
+                           rotations_[element + 1]);
+    ref.rest_deformation =
+        rest_curvature_deformation(frame.transpose() * curvature_per_mm, ref.length_mm);
+}
+
 void ScopeBeam::assemble_mass(BlockTridiagonalMatrix& mass) const {
     ensure_blocks(mass, node_count());
     for (std::size_t e = 0; e < element_count(); ++e)
@@ -202,7 +215,8 @@ double ScopeBeam::strain_energy_Nmm() const {
     for (std::size_t e = 0; e < element_count(); ++e) {
         const CorotationalKinematics k = corotational_kinematics(
             references_[e], positions_[e], rotations_[e], positions_[e + 1], rotations_[e + 1]);
-        energy += 0.5 * k.deformation.dot(references_[e].local_stiffness * k.deformation);
+        const Vec7 strain = k.deformation - references_[e].rest_deformation;
+        energy += 0.5 * strain.dot(references_[e].local_stiffness * strain);
     }
     return energy;
 }

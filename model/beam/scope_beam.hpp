@@ -37,6 +37,11 @@ public:
 
     void set_pose(std::size_t node, const Eigen::Vector3d& position_mm,
                   const Eigen::Matrix3d& rotation);
+    /// Bends `element` at rest to the uniform curvature `curvature_per_mm` (global frame, 1/mm:
+    /// the bending axis times the curvature), resolved in the element's current frame; zero
+    /// makes it straight again. Held until set again: a bending section angulated by its wires
+    /// (model/scenario/tip_steering.hpp). Its axial part (a twist) is dropped.
+    void set_rest_curvature(std::size_t element, const Eigen::Vector3d& curvature_per_mm);
 
     /// All node poses, to undo a rejected load step or time step.
     struct Configuration {

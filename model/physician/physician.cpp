@@ -101,10 +101,19 @@ PhysicianStyleParameters physician_style_parameters(PhysicianStyle style) {
     return p;
 }
 
+namespace {
+/// The style's parameters with what the spec changes.
+PhysicianStyleParameters spec_parameters(const PhysicianSpec& spec) {
+    PhysicianStyleParameters p = physician_style_parameters(spec.style);
+    if (spec.steering_holds_curvature) p.steering_holds_curvature = *spec.steering_holds_curvature;
+    return p;
+}
+}  // namespace
+
 Physician::Physician(const PhysicianSpec& spec, double initial_insertion_mm,
                      double initial_roll_rad, double scope_length_mm)
-    : Physician(spec, physician_style_parameters(spec.style), initial_insertion_mm,
-                initial_roll_rad, scope_length_mm) {}
+    : Physician(spec, spec_parameters(spec), initial_insertion_mm, initial_roll_rad,
+                scope_length_mm) {}
 
 Physician::Physician(const PhysicianSpec& spec, const PhysicianStyleParameters& parameters,
                      double initial_insertion_mm, double initial_roll_rad, double scope_length_mm)

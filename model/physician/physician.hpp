@@ -66,6 +66,8 @@ struct PhysicianStyleParameters {
     bool steers = true;
     double steering_gain = 1.0;         ///< the expert angulates the tip fully into the lumen
     bool steering_follows_turn = true;  ///< ... and around a flexure (tip_steering.hpp)
+    /// ... with the wheels' law (held curvature) rather than a couple (tip_steering.hpp).
+    bool steering_holds_curvature = false;
     // What makes the hand stop pushing.
     /// Scope taken up while the tip did not follow (the loop watch): at the first threshold the
     /// hand jiggles (once, until the tip keeps pace again; 0 = never), at the second it reduces.
@@ -105,6 +107,9 @@ struct PhysicianSpec {
     PhysicianStyle style = PhysicianStyle::careful_expert;
     std::uint64_t seed = 0;
     double max_duration_s = 600;
+    /// The angulation law (tip_steering.hpp): the style's (couple) unless given; true = the
+    /// wheels' held curvature.
+    std::optional<bool> steering_holds_curvature;
 };
 
 /// What the physician sees and feels at the start of a step.

@@ -29,6 +29,8 @@ struct SceneControl {
     /// point ahead and the centerline's own direction there (tip_steering.hpp), so that it
     /// follows a tight flexure instead of pointing at its outer wall.
     bool steering_follows_turn = false;
+    /// The wheels' law: the section's curvature commanded and held (tip_steering.hpp).
+    bool steering_holds_curvature = false;
     /// Per region (kColonRegionsInOrder order): since when the assistant presses there [s], or
     /// empty while not pressing. Each region's firmness rises linearly over `pressure_ramp_s`
     /// from that time (a hand pressed in, as AbdominalPressureWindow::ramp_s).

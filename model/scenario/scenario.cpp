@@ -346,11 +346,12 @@ void read_procedure(const JsonObject& root, Scenario& sc) {
     sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
 }
 
-/// "physician": {"style": ..., "seed": N, "max_duration_s": S}; the steering and pressure effects
+/// "physician": {"style": ..., "seed": N, "max_duration_s": S, "angulation": "couple" | "wheels"};
+/// the steering and pressure effects
 /// it switches are added to the scenario's effects.
 void read_physician(const JsonObject& root, Scenario& sc) {
     const JsonObject o = root.object("physician");
-    o.allow_only({"style", "seed", "max_duration_s"});
+    o.allow_only({"style", "seed", "max_duration_s", "angulation"});
     PhysicianSpec spec;
     const std::string style = o.string("style");
     const auto known = physician_style_from_name(style);
@@ -370,6 +371,13 @@ void read_physician(const JsonObject& root, Scenario& sc) {
             throw ModelError(o.field("max_duration_s") + ": " + number_text(spec.max_duration_s) +
                              " s is shorter than one time step (solver.time_step_s = " +
                              number_text(sc.settings.time_step_s) + " s)");
+    }
+    if (o.has("angulation")) {
+        const std::string law = o.string("angulation");
+        if (law != "couple" && law != "wheels")
+            throw ModelError(o.field("angulation") + ": unknown law " + io::quote_text(law) +
+                             " (known: couple, wheels)");
+        spec.steering_holds_curvature = law == "wheels";
     }
     sc.physician = spec;
     sc.scene_control = std::make_shared<SceneControl>();
@@ -563,7 +571,8 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
         const std::string path = root.field("steering");
         for (std::size_t i = 0; i < windows.size(); ++i) {
             const JsonObject w(windows[i], item(path, i));
-            w.allow_only({"start_s", "end_s", "lookahead_mm", "bending_section_mm", "gain"});
+            w.allow_only({"start_s", "end_s", "lookahead_mm", "bending_section_mm", "gain",
+                          "holds_curvature"});
             SteeringWindow window;
             std::tie(window.start_s, window.end_s) = read_window_times(w);
             window.lookahead_mm = positive_or(w, "lookahead_mm", window.lookahead_mm);
@@ -573,6 +582,7 @@ Scenario read_document(const nlohmann::json& document, const std::string& source
             if (window.gain > 1.0)
                 throw ModelError(w.field("gain") + ": " + number_text(window.gain) +
                                  " must be in (0, 1]");
+            window.holds_curvature = w.boolean_or("holds_curvature", window.holds_curvature);
             sc.steering.push_back(window);
         }
         sc.effects.push_back(make_tip_steering(sc));

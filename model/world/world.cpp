@@ -455,6 +455,16 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             f_ext.segment<3>(static_cast<Eigen::Index>(6 * l.node)) += rotation_ * l.force_N;
             f_ext.segment<3>(static_cast<Eigen::Index>(6 * l.node + 3)) += rotation_ * l.moment_Nmm;
         }
+        std::vector<Eigen::Vector3d> curvature(nodes - 1, Eigen::Vector3d::Zero());
+        for (const auto& e : effects_)
+            e->add_rest_curvature(view, curvature);
+        for (std::size_t k = 0; k + 1 < nodes; ++k) {
+            if (curvature.size() + 1 != nodes || !curvature[k].allFinite()) {
+                report.failure = "a truth effect produced an invalid rest curvature";
+                return report;
+            }
+            scope_.set_rest_curvature(k, rotation_ * curvature[k]);
+        }
     }
 
     // Under full position control the hand moves the outside shaft rigidly: the elements between

@@ -2,7 +2,7 @@
 // Where "truth" effects enter the world (the discrepancy workflow hides them in synthetic
 // recordings and must later name them). An effect may change parameters once, when the world
 // is built, add loads on the scope every step, change the friction of each contact and the
-// wall's local compliance at each contact. The library of effects is model/effects/
+// wall's local compliance at each contact, and bend scope elements at rest. The library of effects is model/effects/
 // (model/effects/EFFECTS.md).
 // The default of every hook is "no change", so an effect overrides only what it touches.
 // All vectors are in the colon's (body) frame, in mm and N.
@@ -74,6 +74,12 @@ public:
     /// Extra loads on scope nodes at the end of the step (body frame) [N, N mm].
     virtual void add_scope_loads(const WorldEffectView& /*view*/,
                                  std::vector<NodalLoad>& /*loads*/) const {}
+    /// Rest curvature of scope elements, held over the step and implicit in it (body frame, 1/mm:
+    /// the bending axis times the curvature; element e joins nodes e and e + 1; zero = straight):
+    /// the bending section angulated by its wires (model/scenario/tip_steering.hpp). Added to
+    /// what earlier effects set.
+    virtual void add_rest_curvature(const WorldEffectView& /*view*/,
+                                    std::vector<Eigen::Vector3d>& /*curvature_per_mm*/) const {}
     /// Friction coefficient of one contact. The default calls the older form below, so an effect
     /// that only needs position and region may override that one.
     virtual double friction_coefficient(const ContactFrictionView& contact) const {

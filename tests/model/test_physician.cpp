@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,7 +68,7 @@ double one_to_one(double insertion) {
 }
 
 PhysicianSpec spec(PhysicianStyle style, std::uint64_t seed = 1, double max_s = 3600) {
-    return {style, seed, max_s};
+    return {style, seed, max_s, std::nullopt};
 }
 
 /// Runs of equal state: [first, last] step indices.
@@ -493,6 +494,15 @@ TEST(PhysicianScenario, KeyIsReadWithItsStyleDefaults) {
                                      "s.json");
     EXPECT_EQ(m.physician->seed, 18446744073709551615ULL);
     EXPECT_EQ(m.physician->max_duration_s, 12.5);
+    EXPECT_FALSE(m.physician->steering_holds_curvature.has_value());  // the style's law
+    for (const auto& [law, holds] : {std::pair{"wheels", true}, std::pair{"couple", false}}) {
+        const Scenario a = read_scenario(
+            physician_doc({{"style", "careful_expert"}, {"seed", 1}, {"angulation", law}}),
+            "s.json");
+        EXPECT_EQ(a.physician->steering_holds_curvature, std::optional<bool>(holds)) << law;
+        const Physician hands(*a.physician, 100.0, 0.0, 1700.0);
+        EXPECT_EQ(hands.parameters().steering_holds_curvature, holds) << law;
+    }
     // With a patient too.
     nlohmann::json patient = physician_doc({{"style", "careful_expert"}, {"seed", 1}});
     patient.erase("colon");
@@ -537,6 +547,8 @@ TEST(PhysicianScenario, BadKeysAreRefusedWithThePath) {
          "s.json: physician.max_duration_s: 0.001 s is shorter than one time step"},
         {{{"style", "careful_expert"}, {"seed", 1}, {"max_duration_s", "long"}},
          "s.json: physician.max_duration_s: "},
+        {{{"style", "careful_expert"}, {"seed", 1}, {"angulation", "knobs"}},
+         "s.json: physician.angulation: unknown law 'knobs' (known: couple, wheels)"},
         {{{"style", "careful_expert"}, {"seed", 1}, {"speed", 3}},
          "s.json: physician.speed: unknown key"},
         {"expert", "s.json: physician"},

@@ -3,6 +3,7 @@
 // computations on hand-built geometry.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -193,6 +194,80 @@ TEST(TipSteering, FollowingTheTurnBendsFurtherIntoAFlexure) {
     EXPECT_NEAR(theta_point, 0.5, 0.1);
     EXPECT_GT(theta_turn, theta_point + 0.15);
     EXPECT_LT(theta_turn, 1.0 + 0.1);
+}
+
+// The wheels' law (holds_curvature): the section's elements, and only they, are bent at rest
+// towards theta0 / L_bend about a0 x d (a0 the axis at the section's base), turned at the wheels'
+// rate pi rad/s of section angle, and let go at the same rate when the window ends.
+TEST(TipSteering, TheWheelsTurnTheSectionsCurvatureAtTheirRateAndHoldIt) {
+    const ColonTube tube =
+        single_bend(120.0, 40.0, M_PI / 2.0, 15.0, ColonRegion::sigmoid, kScopeRadius);
+    SteeringWindow window;
+    window.start_s = 0.0;
+    window.end_s = 5.0;
+    window.gain = 1.0;
+    window.holds_curvature = true;
+    const TipSteering steering({window}, tube, 1.0e6, 10.0);
+    WorldEffectView view = straight_scope_with_tilted_tip(tube, 0.0);
+    std::vector<NodalLoad> loads;
+    steering.add_scope_loads(view, loads);
+    EXPECT_TRUE(loads.empty());  // no couple: the curvature does it
+
+    // The centerline point 40 mm along the bend from the tip (120, 0, 0): base axis +x.
+    std::size_t j = 0;
+    while (tube.arc_length_mm(j) < 160.0)
+        ++j;
+    const Eigen::Vector3d d =
+        (tube.points()[j].position_mm - Eigen::Vector3d(120, 0, 0)).normalized();
+    const double theta0 = std::acos(d.x());
+    const Eigen::Vector3d axis = Eigen::Vector3d::UnitX().cross(d).normalized();
+    const double step_per_mm = M_PI * view.time_step_s / 80.0;  // the wheels' rate over L_bend
+    std::vector<Eigen::Vector3d> curvature(11, Eigen::Vector3d::Zero());
+    steering.add_rest_curvature(view, curvature);
+    for (std::size_t e = 0; e < 11; ++e) {
+        const Eigen::Vector3d expected =
+            e >= 3 ? Eigen::Vector3d(step_per_mm * axis) : Eigen::Vector3d::Zero();
+        EXPECT_LT((curvature[e] - expected).norm(), 1e-12) << "element " << e;
+    }
+    // Held at theta0 / L_bend once the wheels got there (theta0 / pi s; 1 s is ample).
+    for (int k = 1; k <= 100; ++k) {
+        view.time_s = 1.0 + 0.01 * k;
+        curvature.assign(11, Eigen::Vector3d::Zero());
+        steering.add_rest_curvature(view, curvature);
+    }
+    EXPECT_NEAR(theta0, 0.5, 0.1);
+    EXPECT_LT((curvature[10] - theta0 / 80.0 * axis).norm(), 1e-12) << curvature[10].transpose();
+    // Let go: back towards straight at the same rate.
+    view.time_s = 5.0;
+    curvature.assign(11, Eigen::Vector3d::Zero());
+    steering.add_rest_curvature(view, curvature);
+    EXPECT_NEAR(curvature[10].norm(), theta0 / 80.0 - step_per_mm, 1e-12);
+}
+
+// The world bends the section as commanded: a scope held in a wide bend with its tip at the
+// bend's start angulates (the tip's axis turns by about the commanded angle within a second).
+TEST(TipSteering, TheWorldBendsTheSectionToTheHeldCurvature) {
+    nlohmann::json doc = nlohmann::json::parse(R"({
+    "colon": {"bundled": "single_bend", "lead_mm": 300, "bend_radius_mm": 60, "bend_angle_deg": 90,
+              "inner_radius_mm": 30},
+    "scope": {"model": "cf_q160l", "length_mm": 400, "elements": 40},
+    "initial_insertion_mm": 300,
+    "procedure": [{"action": "hold", "start_s": 0, "end_s": 1.0}],
+    "steering": [{"start_s": 0, "end_s": 1.0, "gain": 1.0, "holds_curvature": true}]
+  })");
+    const Scenario s = read_scenario(doc, "s.json");
+    ASSERT_TRUE(s.steering.at(0).holds_curvature);
+    auto world = build_world(s);
+    const SimulationSummary sum = run_simulation(*world, s, {});
+    ASSERT_TRUE(sum.complete) << sum.message;
+    const std::size_t tip = world->scope_node_count() - 1;
+    const Eigen::Vector3d base_axis = world->node_axis(tip - 8);
+    const Eigen::Vector3d tip_axis = world->node_axis(tip);
+    const double bend = std::acos(std::clamp(base_axis.dot(tip_axis), -1.0, 1.0));
+    // The point 40 mm into a 60 mm bend lies 0.33 rad (its chord's half angle) off the axis at
+    // the tip; from the base 80 mm behind, a little less. The section bends that far, not more.
+    EXPECT_GT(bend, 0.2);
+    EXPECT_LT(bend, 0.45);
 }
 
 nlohmann::json scenario_with_pressure() {

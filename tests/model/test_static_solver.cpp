@@ -141,6 +141,38 @@ TEST(StaticSolver, EndMomentBendsTheBeamIntoTheSameArc) {
     expect_discrete_arc(beam, theta, 1e-7 * length);
 }
 
+// A rest curvature (a bending section angulated by its wires, ScopeBeam::set_rest_curvature):
+// the free cantilever takes the arc of that curvature with no load at all and no strain energy,
+// and an end moment -EI kappa undoes it (M = EI (kappa - kappa_rest), Euler-Bernoulli).
+TEST(StaticSolver, ARestCurvatureBendsAFreeBeamIntoItsArcAndAnEndMomentStraightensIt) {
+    const double length = 300.0, theta = M_PI / 2.0;
+    const BeamSection s = cf_q160l::section();
+    ScopeBeam beam = straight_beam(Vec3::Zero(), Vec3::UnitX(), length, 15, s);
+    // The hand turns the wheel in ten steps; each is resolved in the elements' current frames.
+    for (int turn = 1; turn <= 10; ++turn) {
+        for (std::size_t e = 0; e < beam.element_count(); ++e)
+            beam.set_rest_curvature(e, Vec3(0, 0, 0.1 * turn * theta / length));
+        const StaticReport report = solve_static(beam, BeamLoads{}, {clamp(0)});
+        ASSERT_TRUE(report.converged) << report.message << "\n" << report.convergence_table();
+    }
+    expect_discrete_arc(beam, theta, 1e-7 * length);
+    EXPECT_LT(beam.strain_energy_Nmm(), 1e-9 * s.bending_stiffness_z_Nmm2 / length);
+
+    BeamLoads straighten;
+    straighten.nodal.push_back(
+        {15, Vec3::Zero(), Vec3(0, 0, -s.bending_stiffness_z_Nmm2 * theta / length)});
+    const StaticReport report = solve_static(beam, straighten, {clamp(0)});
+    ASSERT_TRUE(report.converged) << report.message << "\n" << report.convergence_table();
+    for (std::size_t k = 0; k < beam.node_count(); ++k)
+        EXPECT_TRUE(matrices_near(beam.position(k), beam.reference_position(k), 1e-6 * length))
+            << "node " << k << ": " << beam.position(k).transpose();
+    // Straight again, but under the moment: its strain energy is the arc's, M^2 L / (2 EI).
+    const double moment = s.bending_stiffness_z_Nmm2 * theta / length;
+    EXPECT_NEAR(beam.strain_energy_Nmm(),
+                moment * moment * length / (2.0 * s.bending_stiffness_z_Nmm2),
+                1e-6 * moment * theta);
+}
+
 // Small tip load on a beam along an arbitrary direction, load perpendicular to it: the linear
 // Timoshenko result delta = P L^3 / 3EI + P L / kGA along the load (the elements are exact for
 // end loads). Nonlinear corrections are O((delta / L)^2) = 1e-8 here.
