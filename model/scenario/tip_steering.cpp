@@ -133,10 +133,14 @@ void TipSteering::add_rest_curvature(const WorldEffectView& view,
         }
     }
     if (held_elements_ == 0) return;
-    Eigen::Vector3d change = target - held_curvature_per_mm_;
+    if (view.time_s != turned_at_s_) {  // a retried step does not turn the wheels again
+        turned_at_s_ = view.time_s;
+        turned_from_per_mm_ = held_curvature_per_mm_;
+    }
+    Eigen::Vector3d change = target - turned_from_per_mm_;
     const double most = kWheelRate_rad_per_s * view.time_step_s / section_mm;
     if (change.norm() > most) change *= most / change.norm();
-    held_curvature_per_mm_ += change;
+    held_curvature_per_mm_ = turned_from_per_mm_ + change;
     for (std::size_t e = tip - held_elements_; e < tip; ++e)
         curvature_per_mm[e] += held_curvature_per_mm_;
 }

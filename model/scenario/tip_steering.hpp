@@ -93,6 +93,8 @@ private:
     // over how many elements behind the tip.
     mutable Eigen::Vector3d held_curvature_per_mm_ = Eigen::Vector3d::Zero();
     mutable std::size_t held_elements_ = 0;
+    mutable double turned_at_s_ = -1;  // the step the wheels last turned in, and from where
+    mutable Eigen::Vector3d turned_from_per_mm_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace scopekin::model
