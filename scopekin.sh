@@ -53,7 +53,8 @@ Builds go through ccache (cache in ~/.cache/ccache, 8 GB at most), so a second b
 sources, in this clone or another, recompiles only what changed; SCOPEKIN_NO_CCACHE=1 turns it off.
 Packages are checked with dpkg-query; only if some are missing does the script run
 'apt-get update' and 'apt-get install -y --no-install-recommends <missing>' (as root, or via sudo).
-Logs of 'test' are kept in build/logs/<preset>.log.
+Logs of 'test' are kept in build/logs/<preset>.log; the last 25 lines of each failed test's
+output are printed again just before the summary (and kept in build/logs/failed_tails.log).
 USAGE
 }
 
@@ -152,6 +153,7 @@ run_presets() {
   ensure_packages "${TEST_PACKAGES[@]}"
   use_compiler_cache
   mkdir -p build/logs
+  rm -f build/logs/failed_tails.log
 
   local total=0 failed=0 broken=() report=() start seconds log line t f p configure test_preset
   for p in "$@"; do
@@ -188,10 +190,18 @@ run_presets() {
       t=1; f=1  # no tests found or ctest did not get to run them
     fi
     total=$((total + t)); failed=$((failed + f))
-    [[ $f -ne 0 ]] && broken+=("$p (tests)")
+    if [[ $f -ne 0 ]]; then
+      broken+=("$p (tests)")
+      failed_tests_tail "build/$configure/Testing/Temporary/LastTest.log" >>build/logs/failed_tails.log
+    fi
     report+=("$p: $((t - f))/$t passed, ${seconds}s configure+build+test")
   done
 
+  # The end of each failed test's output again, next to the summary (a CI log is often read from
+  # its end, and the host preset's output runs to thousands of lines).
+  if [[ -s build/logs/failed_tails.log ]]; then
+    cat build/logs/failed_tails.log
+  fi
   echo "==================== summary ===================="
   local r
   for r in "${report[@]}"; do echo "  $r"; done
@@ -208,6 +218,20 @@ run_presets() {
   fi
   echo "${percent}% tests passed, ${failed} tests failed out of ${total}"
   [[ $failed -eq 0 && $total -gt 0 ]]
+}
+
+# The last 25 lines of the output of every failed test in a CTest LastTest.log.
+failed_tests_tail() {
+  [[ -f $1 ]] || return 0
+  awk '
+    / Testing: / { name = $3; n = 0; inside = 0; next }
+    /^Output:$/ { inside = 1; getline; next }
+    /^<end of output>$/ { inside = 0; next }
+    inside { lines[n++] = $0; next }
+    /^Test Failed\.$/ || /^Test Failed / {
+      print "==================== failed: " name " (its last lines) ===================="
+      for (i = (n > 25 ? n - 25 : 0); i < n; i++) print "  " lines[i]
+    }' "$1"
 }
 
 main() {

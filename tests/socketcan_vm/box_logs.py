@@ -34,6 +34,9 @@ KINETIC_STALE = (KINETIC_INSERTION_STALE | KINETIC_FORCE_STALE | KINETIC_TORQUE_
                  | KINETIC_ROLL_STALE)
 # ... and the force cell lost: stale 20 periods in a row (protocol 1.4)
 KINETIC_FORCE_BLIND = 1 << 14
+# kinetics::Config::force_blind_after_steps, the box's default: the force cell is reported lost in
+# the 20th stale period in a row.
+FORCE_BLIND_AFTER_PERIODS = 20
 # BoxCounters.CounterIndex (protocol::BoxCounterIndex)
 COUNTER_INDEX = {"can_received": 0, "can_dropped": 1, "can_error_frames": 2, "can_bus_off": 3,
                  "can_send_failures": 4, "serial_frames": 10, "period_overruns": 13}
@@ -137,6 +140,22 @@ def read_marks(path):
             name, value = line.split()
             marks[name] = int(value)
     return marks
+
+
+def bit_runs(log, column, bit, last_period):
+    """The runs of periods (first, last) in which `bit` of `column` is set, by the fault log (a row
+    is written at each change, so between two rows the state is the first row's; the last row's
+    state lasts to `last_period`)."""
+    runs, first = [], None
+    for row in log.rows:
+        if row[column] & bit and first is None:
+            first = row["period"]
+        elif not row[column] & bit and first is not None:
+            runs.append((first, row["period"] - 1))
+            first = None
+    if first is not None:
+        runs.append((first, last_period))
+    return runs
 
 
 def longest_lag_periods(log):

@@ -18,12 +18,13 @@ At any speed:
   per period, a valid estimate that follows the advance;
 * the force cell's 0.3 s silence (found by frame count: a starved canplayer leaves other pauses,
   counted): the stale bit in a BoxStatus, InputsStale on the estimate, the cell reported lost
-  (KineticFaults bit 14, protocol 1.4) where the box ran 25 periods or more in the silence, and the
-  bits cleared after
-  the cell's return; within 3 periods each (counted in KineticEstimate frames, i.e. box periods,
-  not in wall time) where the box ran no late period within 20 periods of the silence's edges
-  (a box that fell behind reads the returning samples late: rightly not fresh, flagged as a
-  backlog);
+  (KineticFaults bit 14, protocol 1.4) in the 20th force-stale period in a row and in no other
+  period by the box's own fault log, and on the bus in a BoxStatus after the silence began; the
+  bits cleared after the cell's return.  Where the box ran no late period within 20 periods of
+  the silence's edges (a box that fell behind reads the returning samples late: rightly not
+  fresh, flagged as a backlog): stale and cleared within 3 periods each (counted in
+  KineticEstimate frames, i.e. box periods, not in wall time), and, where the silence lasted
+  0.15 s or more on the bus, 20 stale periods reached;
 * the EM tracker on the serial line (--serial): every frame it wrote taken as a valid sample,
   counted in BoxCounters.serial_frames, no serial fault from the first clear period until the
   tracker paused (fault log and BoxStatus.TrackerFaults; a stale bit only where the guest
@@ -51,7 +52,8 @@ import canmatrix.formats
 from box_logs import (
     COUNTER_INDEX, COUNTERS_ID, DRIVER_FORCE_STALE, DRIVER_PERIOD_OVERRUN, DRIVER_RECEIVE_DROPPED,
     ENCODER_ID, ESTIMATE_ID, FORCE_ID, KINETIC_FORCE_BLIND, KINETIC_FORCE_STALE, KINETIC_TORQUE_STALE, STATION_ID,
-    STATUS_ID, SUMMARY_ID, ALARMS_ID, EVIDENCE_ID, TRACKER_STALE, FaultLog, check_flags_account, decode_box_frames,
+    STATUS_ID, SUMMARY_ID, ALARMS_ID, EVIDENCE_ID, TRACKER_STALE, FORCE_BLIND_AFTER_PERIODS, FaultLog, bit_runs,
+    check_flags_account, decode_box_frames,
     longest_lag_periods, read_candump, read_marks)
 
 PERIOD_US = 5000
@@ -176,14 +178,26 @@ def main():
                 break
         expect(any(v["InputsStale"] == 1 for i, d, v in decoded if d == ESTIMATE_ID and last_before < i < first_after),
                "estimate flagged InputsStale (held) during the silence")
-        # Lost after 20 stale box periods: judged where the box ran 25 or more periods in the
-        # silence (one KineticEstimate each; a box that fell behind, e.g. under AddressSanitizer,
-        # may run fewer).
+        # Lost in the 20th stale period in a row, by the box's own count (its fault log has every
+        # period it ran, whatever its speed): bit 14 in exactly those periods, and the silence's
+        # run of stale periods, where it reached 20, reported in a BoxStatus after the silence began.
+        last_period = stats["periods"]
+        stale_runs = bit_runs(log, "kinetic_faults", KINETIC_FORCE_STALE, last_period)
+        blind_runs = bit_runs(log, "kinetic_faults", KINETIC_FORCE_BLIND, last_period)
+        expected_blind = [(first + FORCE_BLIND_AFTER_PERIODS - 1, last) for first, last in stale_runs
+                          if last - first + 1 >= FORCE_BLIND_AFTER_PERIODS]
+        expect(blind_runs == expected_blind,
+               f"KineticFaults bit 14 in the periods {blind_runs[:4]}, from the 20th of each run of force-stale "
+               f"periods {expected_blind[:4]}")
         silent_periods = sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and last_before < i < first_after)
-        if silent_periods >= 25:
+        silence_start = sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and i < last_before)
+        silence_blind = any(first <= silence_start + silent_periods and last >= silence_start
+                            for first, last in expected_blind)
+        if silence_blind:
             expect(any(int(v["KineticFaults"]) & KINETIC_FORCE_BLIND
-                       for i, d, v in decoded if d == STATUS_ID and last_before < i <= first_after),
-                   f"the force cell reported lost (KineticFaults bit 14) after {silent_periods} silent periods")
+                       for i, d, v in decoded if d == STATUS_ID and i > last_before),
+                   f"the force cell reported lost (KineticFaults bit 14) on the bus after {silent_periods} "
+                   f"periods of silence")
         periods_seen = 0
         for index, ident, values in decoded:
             if index < first_after:
@@ -205,6 +219,11 @@ def main():
                    if any(edge <= r["period"] <= edge + 20 for edge in edges)
                    and r["driver_faults"] & DRIVER_PERIOD_OVERRUN]
         silence_judged = not lagging
+        # 20 periods are 0.1 s: judged where the silence lasted 0.15 s or more on the bus (a player
+        # starved just before it shortens it) and the box kept its schedule at its edges.
+        expect(silence_blind or not silence_judged or silence_on_bus_s < 0.15,
+               f"the silence ({silent_periods} box periods, {silence_on_bus_s:.2f} s on the bus) reached "
+               f"20 force-stale periods in a row")
         expect(stale_after is not None and (stale_after <= 3 or not silence_judged),
                f"BoxStatus with the force stale bit within 3 periods of the silence (after {stale_after})")
         expect(recovered_after is not None and (recovered_after <= 3 or not silence_judged),
