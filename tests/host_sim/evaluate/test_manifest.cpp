@@ -1,6 +1,7 @@
 // Evaluation manifests (host_sim/evaluate/manifest.hpp): the base scenario under each case, the
 // keys a case may give, and the refusals, each naming the manifest, the case and the field.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -16,9 +17,11 @@ namespace fs = std::filesystem;
 
 class Manifests : public ::testing::Test {
 protected:
+    // One folder per test process: CTest runs this fixture's tests side by side, and each
+    // removes its folder at the end (a shared one was once removed under another's feet).
     fs::path dir = fs::temp_directory_path() /
-                   ("scopekin_test_manifest_" +
-                    std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+                   ("scopekin_test_manifest_" + std::to_string(::getpid()) + "_" +
+                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
     void SetUp() override { fs::create_directories(dir); }
     void TearDown() override { fs::remove_all(dir); }
     fs::path write(const std::string& name, const std::string& text) {
