@@ -198,10 +198,12 @@ def main():
         expect(judged_blind == expected_blind and not early_blind,
                f"KineticFaults bit 14 in the periods {blind_runs[:4]}, from the 20th of each run of force-stale "
                f"periods {expected_blind[:4]} (inputs all fresh first in period {ready})")
-        silent_periods = sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and last_before < i < first_after)
-        silence_start = sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and i < last_before)
-        silence_blind = any(first <= silence_start + silent_periods and last >= silence_start
-                            for first, last in expected_blind)
+        # The box's period at an edge of the silence: its KineticEstimate frames before it on the
+        # bus (one per period, checked above).
+        edges = [sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and i < edge)
+                 for edge in (last_before, first_after)]
+        silent_periods = edges[1] - edges[0]
+        silence_blind = any(first <= edges[1] and last >= edges[0] for first, last in expected_blind)
         if silence_blind:
             expect(any(int(v["KineticFaults"]) & KINETIC_FORCE_BLIND
                        for i, d, v in decoded if d == STATUS_ID and i > last_before),
@@ -220,10 +222,6 @@ def main():
         # "Within 3 periods" holds where the box kept its schedule around the silence's edges;
         # a box that fell behind there reads the returning samples late (a backlog: rightly not
         # fresh, kBoxFaultReceiveBacklog) and must only recover.
-        # The box's period at an edge: its KineticEstimate frames before it on the bus (one per
-        # period, checked above).
-        edges = [sum(1 for i, d, _ in decoded if d == ESTIMATE_ID and i < edge)
-                 for edge in (last_before, first_after)]
         lagging = [r["period"] for r in log.rows
                    if any(edge <= r["period"] <= edge + 20 for edge in edges)
                    and r["driver_faults"] & DRIVER_PERIOD_OVERRUN]
