@@ -15,6 +15,12 @@ struct NodalLoad {
     Eigen::Vector3d force_N = Eigen::Vector3d::Zero();
     Eigen::Vector3d moment_Nmm =
         Eigen::Vector3d::Zero();  ///< fixed in space (not a follower moment)
+    /// The force's stiffness -dF/dx [N/mm] for a load that follows the node's position (a spring
+    /// an effect adds). The world's step takes it implicitly: the force at the step's end is
+    /// force_N - K (x_end - x_start), and K joins the step matrix, so a stiff spring cannot make
+    /// the step unstable. Zero (the default): an explicit load. Static solves use springs
+    /// (AnchorSpring) instead and ignore it.
+    Eigen::Matrix3d stiffness_N_per_mm = Eigen::Matrix3d::Zero();
 };
 
 /// A linear spring [N/mm] pulling a node's position towards a fixed anchor point: the mesentery

@@ -9,6 +9,21 @@
 
 namespace scopekin::model {
 
+namespace {
+
+/// The hand's push on one node, F = -k l excess u, with its stiffness k l u u^T taken implicitly
+/// in the world's step (a firm hand on a stiff shaft is a stiff spring: explicit, it would limit
+/// the firmness the step can carry). Only the normal part: the turn of u as the node moves
+/// sideways adds k l excess/d, a few times smaller where the wall is pushed out by millimetres.
+void push_pressure(std::vector<NodalLoad>& loads, const effects::NodeBeyondRestWall& n,
+                   double k_N_per_mm2) {
+    const double k_N_per_mm = k_N_per_mm2 * n.node_length_mm;
+    loads.push_back({n.node, -k_N_per_mm * n.excess_mm * n.outward, Eigen::Vector3d::Zero(),
+                     k_N_per_mm * n.outward * n.outward.transpose()});
+}
+
+}  // namespace
+
 AbdominalPressure::AbdominalPressure(std::vector<AbdominalPressureWindow> windows)
     : windows_(std::move(windows)) {
     for (std::size_t i = 0; i < windows_.size(); ++i) {
@@ -47,9 +62,7 @@ void AbdominalPressure::add_scope_loads(const WorldEffectView& view,
         effects::for_each_node_beyond_rest_wall(
             view, [&](ColonRegion r) { return k_N_per_mm2[static_cast<std::size_t>(r)] > 0.0; },
             [&](const effects::NodeBeyondRestWall& n) {
-                const double k = k_N_per_mm2[static_cast<std::size_t>(n.region)];
-                loads.push_back({n.node, -k * n.node_length_mm * n.excess_mm * n.outward,
-                                 Eigen::Vector3d::Zero()});
+                push_pressure(loads, n, k_N_per_mm2[static_cast<std::size_t>(n.region)]);
             });
         return;
     }
@@ -68,10 +81,7 @@ void AbdominalPressure::add_scope_loads(const WorldEffectView& view,
         [&](ColonRegion r) {
             return std::find(regions.begin(), regions.end(), r) != regions.end();
         },
-        [&](const effects::NodeBeyondRestWall& n) {
-            loads.push_back({n.node, -k_N_per_mm2 * n.node_length_mm * n.excess_mm * n.outward,
-                             Eigen::Vector3d::Zero()});
-        });
+        [&](const effects::NodeBeyondRestWall& n) { push_pressure(loads, n, k_N_per_mm2); });
 }
 
 }  // namespace scopekin::model

@@ -10,7 +10,9 @@
 //   F = -k l excess u           [N], u = unit vector from the rest centerline to the node,
 // with l the scope length the node carries [mm] and k [N/mm per mm of scope] the firmness of
 // the hand (a stated guess: 0.02 N/mm^2 holds a bowing 10 mm node with 2 N, ten times the
-// mesentery of model/effects/EFFECTS.md 2). The hand presses in over `ramp_s` (k rises linearly
+// mesentery of model/effects/EFFECTS.md 2). The force's stiffness k l u u^T goes with it
+// (NodalLoad::stiffness_N_per_mm): the world's step takes the push implicitly, so a firm hand is
+// stable at any step. The hand presses in over `ramp_s` (k rises linearly
 // from 0): a firm hand switched on within one step jolts the stiff shaft. The same law as the truth effect
 // mesenteric_retraction, but switched on in time windows and over chosen regions: it is what
 // the assistant does, not a property of the patient. The firmware never sees it.

@@ -423,7 +423,13 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         hold(6 * k + 5, spin.z());
     }
 
-    // 2. Loads at the end of the step: gravity, the handle's force/torque, truth effects.
+    // 2. Loads at the end of the step: gravity, the handle's force/torque, truth effects (those
+    //    that follow the node's position with a stiffness are implicit in the step: 3. below).
+    struct LoadStiffness {
+        std::size_t node;
+        Eigen::Matrix3d stiffness_N_per_mm;  // world frame
+    };
+    std::vector<LoadStiffness> load_stiffness;
     // The shaft outside the body is carried by the hand and the box: gravity acts inside only.
     Eigen::VectorXd f_ext = scope_.gravity_load(gravity_);
     for (std::size_t k = 0; k < nodes; ++k)
@@ -448,12 +454,16 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         for (const auto& e : effects_)
             e->add_scope_loads(view, loads);
         for (const NodalLoad& l : loads) {
-            if (l.node >= nodes || !l.force_N.allFinite() || !l.moment_Nmm.allFinite()) {
+            if (l.node >= nodes || !l.force_N.allFinite() || !l.moment_Nmm.allFinite() ||
+                !l.stiffness_N_per_mm.allFinite()) {
                 report.failure = "a truth effect produced an invalid load";
                 return report;
             }
             f_ext.segment<3>(static_cast<Eigen::Index>(6 * l.node)) += rotation_ * l.force_N;
             f_ext.segment<3>(static_cast<Eigen::Index>(6 * l.node + 3)) += rotation_ * l.moment_Nmm;
+            if (!l.stiffness_N_per_mm.isZero(0.0) && !held[l.node])
+                load_stiffness.push_back(
+                    {l.node, rotation_ * l.stiffness_N_per_mm * rotation_.transpose()});
         }
         std::vector<Eigen::Vector3d> curvature(nodes - 1, Eigen::Vector3d::Zero());
         for (const auto& e : effects_)
@@ -492,6 +502,12 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
                      b_damp = settings_.damping.stiffness_coefficient_s;
         unconstrained_ = geometric_tangent ? assembly_.tangent : assembly_.material_tangent;
         Eigen::VectorXd residual = f_ext - assembly_.internal_force;
+        // Position-following loads at the step's end: F - K d (their K in the step matrix).
+        for (const LoadStiffness& l : load_stiffness) {
+            const auto at = static_cast<Eigen::Index>(6 * l.node);
+            unconstrained_.diagonal(l.node).topLeftCorner<3, 3>() += l.stiffness_N_per_mm;
+            residual.segment<3>(at) -= l.stiffness_N_per_mm * increment_total.segment<3>(at);
+        }
         if (it == 0) {
             // C = a' M + b' K_material, frozen at the step's start; d = 0 so far.
             momentum = mass_.multiply(velocity_) / h;

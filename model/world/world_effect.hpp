@@ -19,7 +19,9 @@
 namespace scopekin::model {
 
 /// What an effect may read about the world during a step. Scope quantities are those at the
-/// start of the step (the loads an effect adds are applied at its end: an explicit coupling).
+/// start of the step (the loads an effect adds are applied at its end: an explicit coupling, but
+/// for a load that states its stiffness, NodalLoad::stiffness_N_per_mm, which the step takes
+/// implicitly).
 struct WorldEffectView {
     double time_s = 0;  ///< at the end of the step being computed
     double time_step_s = 0;
