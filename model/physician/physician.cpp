@@ -106,6 +106,8 @@ namespace {
 PhysicianStyleParameters spec_parameters(const PhysicianSpec& spec) {
     PhysicianStyleParameters p = physician_style_parameters(spec.style);
     if (spec.steering_holds_curvature) p.steering_holds_curvature = *spec.steering_holds_curvature;
+    if (spec.pressure_stiffness_N_per_mm2)
+        p.pressure_stiffness_N_per_mm2 = *spec.pressure_stiffness_N_per_mm2;
     return p;
 }
 }  // namespace

@@ -94,6 +94,9 @@ struct PhysicianStyleParameters {
     double max_withdraw_mm = 300;  ///< and at most the excess noticed + 100 mm
     /// The assistant presses from this reduction on (1 = the first; 0 = never).
     std::size_t pressure_from_reduction = 1;
+    /// The assistant's firmness when pressing (model/scenario/abdominal_pressure.hpp) [N/mm per mm
+    /// of scope]: the demo's 0.07, a stated guess.
+    double pressure_stiffness_N_per_mm2 = 0.07;
     std::size_t max_reductions = 8;  ///< a loop after this many: gives up
     // Giving up.
     double stall_give_up_s = 90;  ///< no new ground (20 mm along the colon) for this long
@@ -110,6 +113,8 @@ struct PhysicianSpec {
     /// The angulation law (tip_steering.hpp): the style's (couple) unless given; true = the
     /// wheels' held curvature.
     std::optional<bool> steering_holds_curvature;
+    /// The assistant's firmness [N/mm per mm]: the style's unless given (0, 1].
+    std::optional<double> pressure_stiffness_N_per_mm2;
 };
 
 /// What the physician sees and feels at the start of a step.

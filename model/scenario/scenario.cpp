@@ -346,12 +346,13 @@ void read_procedure(const JsonObject& root, Scenario& sc) {
     sc.procedure.check_depths(sc.settings.initial_insertion_mm, sc.scope.length_mm, procedure_path);
 }
 
-/// "physician": {"style": ..., "seed": N, "max_duration_s": S, "angulation": "couple" | "wheels"};
+/// "physician": {"style": ..., "seed": N, "max_duration_s": S, "angulation": "couple" | "wheels",
+/// "pressure_stiffness_N_per_mm2": k};
 /// the steering and pressure effects
 /// it switches are added to the scenario's effects.
 void read_physician(const JsonObject& root, Scenario& sc) {
     const JsonObject o = root.object("physician");
-    o.allow_only({"style", "seed", "max_duration_s", "angulation"});
+    o.allow_only({"style", "seed", "max_duration_s", "angulation", "pressure_stiffness_N_per_mm2"});
     PhysicianSpec spec;
     const std::string style = o.string("style");
     const auto known = physician_style_from_name(style);
@@ -378,6 +379,13 @@ void read_physician(const JsonObject& root, Scenario& sc) {
             throw ModelError(o.field("angulation") + ": unknown law " + io::quote_text(law) +
                              " (known: couple, wheels)");
         spec.steering_holds_curvature = law == "wheels";
+    }
+    if (o.has("pressure_stiffness_N_per_mm2")) {
+        const double k = o.number("pressure_stiffness_N_per_mm2");
+        if (!(k > 0.0 && k <= 1.0))
+            throw ModelError(o.field("pressure_stiffness_N_per_mm2") + ": " + number_text(k) +
+                             " N/mm per mm must be in (0, 1]");
+        spec.pressure_stiffness_N_per_mm2 = k;
     }
     sc.physician = spec;
     sc.scene_control = std::make_shared<SceneControl>();

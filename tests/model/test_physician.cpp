@@ -68,7 +68,7 @@ double one_to_one(double insertion) {
 }
 
 PhysicianSpec spec(PhysicianStyle style, std::uint64_t seed = 1, double max_s = 3600) {
-    return {style, seed, max_s, std::nullopt};
+    return {style, seed, max_s, std::nullopt, std::nullopt};
 }
 
 /// Runs of equal state: [first, last] step indices.
@@ -503,6 +503,16 @@ TEST(PhysicianScenario, KeyIsReadWithItsStyleDefaults) {
         const Physician hands(*a.physician, 100.0, 0.0, 1700.0);
         EXPECT_EQ(hands.parameters().steering_holds_curvature, holds) << law;
     }
+    const Scenario firm = read_scenario(
+        physician_doc(
+            {{"style", "careful_expert"}, {"seed", 1}, {"pressure_stiffness_N_per_mm2", 0.7}}),
+        "s.json");
+    EXPECT_EQ(firm.physician->pressure_stiffness_N_per_mm2, std::optional<double>(0.7));
+    EXPECT_EQ(
+        Physician(*firm.physician, 100.0, 0.0, 1700.0).parameters().pressure_stiffness_N_per_mm2,
+        0.7);
+    EXPECT_EQ(Physician(*m.physician, 100.0, 0.0, 1700.0).parameters().pressure_stiffness_N_per_mm2,
+              0.07);  // the style's
     // With a patient too.
     nlohmann::json patient = physician_doc({{"style", "careful_expert"}, {"seed", 1}});
     patient.erase("colon");
@@ -549,6 +559,10 @@ TEST(PhysicianScenario, BadKeysAreRefusedWithThePath) {
          "s.json: physician.max_duration_s: "},
         {{{"style", "careful_expert"}, {"seed", 1}, {"angulation", "knobs"}},
          "s.json: physician.angulation: unknown law 'knobs' (known: couple, wheels)"},
+        {{{"style", "careful_expert"}, {"seed", 1}, {"pressure_stiffness_N_per_mm2", 0}},
+         "s.json: physician.pressure_stiffness_N_per_mm2: 0 N/mm per mm must be in (0, 1]"},
+        {{{"style", "careful_expert"}, {"seed", 1}, {"pressure_stiffness_N_per_mm2", 2}},
+         "s.json: physician.pressure_stiffness_N_per_mm2: 2 N/mm per mm must be in (0, 1]"},
         {{{"style", "careful_expert"}, {"seed", 1}, {"speed", 3}},
          "s.json: physician.speed: unknown key"},
         {"expert", "s.json: physician"},
