@@ -154,6 +154,12 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     world_stats["dropped_contacts_total"] = sum.dropped_contacts_total;
     world_stats["material_tangent_fallbacks"] = sum.material_tangent_fallbacks;
     world_stats["under_relaxed_steps"] = sum.under_relaxed_steps;
+    world_stats["assistant_pressure"] = {
+        {"max_force_N", sum.max_assistant_pressure_force_N},
+        {"pressing_s", sum.assistant_pressing_s},
+        {"mean_force_while_pressing_N",
+         sum.assistant_pressing_s > 0 ? sum.assistant_pressure_impulse_Ns / sum.assistant_pressing_s
+                                      : 0.0}};
     Json pleats = Json::array();
     for (const model::StretchPleating& k : sum.telescoping)
         pleats.push_back({{"region", std::string(model::region_name(k.region))},

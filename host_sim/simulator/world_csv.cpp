@@ -30,7 +30,7 @@ std::string world_csv_header(const model::Scenario& sc, const std::vector<std::s
     for (model::ColonRegion r : model::kColonRegionsInOrder)
         h += ",max_contact_force_" + std::string(model::region_name(r)) + "_N";
     h += ",sticking_contacts,slipping_contacts,tip_driving_angle_deg,gs_sweeps,tip_path_mm,tip_"
-         "contact_force_N,tip_region";
+         "contact_force_N,tip_region,assistant_pressure_force_N";
     return h;
 }
 
@@ -47,7 +47,7 @@ void write_world_csv_row(std::ostream& out, const model::WorldRow& s, const Worl
     out << ',' << s.sticking_contacts << ',' << s.slipping_contacts << ','
         << (s.has_tip_driving_angle ? num(s.tip_driving_angle_deg) : std::string()) << ','
         << s.gs_sweeps << ',' << num(r.tip_path_mm) << ',' << num(r.tip_force_N.norm()) << ','
-        << r.tip_region << '\n';
+        << r.tip_region << ',' << num(s.assistant_pressure_force_N) << '\n';
 }
 
 std::string contacts_csv_header() {

@@ -12,6 +12,17 @@ namespace scopekin::model {
 namespace {
 
 constexpr double kDegPerRad = 180.0 / M_PI;
+/// The name of the effect that is the assistant's hand (model/scenario/abdominal_pressure.hpp).
+constexpr const char* kAssistantPressureEffect = "abdominal_pressure";
+/// Below this the hand is only resting on the abdomen [N].
+constexpr double kAssistantPressingForce_N = 0.1;
+
+void note_assistant_pressure(double force_N, double h_s, SimulationSummary& sum) {
+    sum.max_assistant_pressure_force_N = std::max(sum.max_assistant_pressure_force_N, force_N);
+    if (!(force_N > kAssistantPressingForce_N)) return;
+    sum.assistant_pressing_s += h_s;
+    sum.assistant_pressure_impulse_Ns += force_N * h_s;
+}
 
 std::size_t region_index(ColonRegion r) {
     return static_cast<std::size_t>(r);
@@ -66,6 +77,7 @@ WorldRow sample_world(const World& world, const WorldStepReport* last_step,
         }
     }
     s.gs_sweeps = last_step != nullptr ? last_step->sweeps : 0;
+    s.assistant_pressure_force_N = world.effect_force_N(kAssistantPressureEffect);
     return s;
 }
 
@@ -218,6 +230,7 @@ SimulationSummary run_simulation(World& world, const Scenario& scenario, HandCom
         sum.max_handle_force_N = std::max(sum.max_handle_force_N, std::abs(world.handle_force_N()));
         sum.max_handle_torque_Nmm =
             std::max(sum.max_handle_torque_Nmm, std::abs(world.handle_torque_Nmm()));
+        note_assistant_pressure(world.effect_force_N(kAssistantPressureEffect), h, sum);
         std::size_t loaded = 0;
         const WorldContact* strongest = nullptr;
         const WorldContact* deepest = nullptr;

@@ -39,6 +39,9 @@ struct WorldRow {
     bool has_tip_driving_angle = false;
     double tip_driving_angle_deg = 0;  ///< of the distal-most loaded contact
     std::size_t gs_sweeps = 0;         ///< of the step that led here (0 at t = 0)
+    /// |net force| the assistant's hand passes to the scope through the abdomen [N]
+    /// (World::effect_force_N("abdominal_pressure"); 0 while nobody presses).
+    double assistant_pressure_force_N = 0;
 };
 
 struct SimulationProgress {
@@ -66,9 +69,12 @@ struct SimulationSummary {
     double end_time_s = 0;        ///< where the procedure ends
     double simulated_time_s = 0;  ///< world time reached
     double wall_time_s = 0;
-    double real_time_factor = 0;       ///< simulated / wall time
-    double max_handle_force_N = 0;     ///< largest |handle force|
-    double max_handle_torque_Nmm = 0;  ///< largest |handle torque|
+    double real_time_factor = 0;                ///< simulated / wall time
+    double max_handle_force_N = 0;              ///< largest |handle force|
+    double max_handle_torque_Nmm = 0;           ///< largest |handle torque|
+    double max_assistant_pressure_force_N = 0;  ///< largest WorldRow::assistant_pressure_force_N
+    double assistant_pressing_s = 0;  ///< time with an assistant's force on the scope (> 0.1 N)
+    double assistant_pressure_impulse_Ns = 0;  ///< its integral over that time
     double max_contact_force_N = 0;
     std::array<double, 8> max_contact_force_by_region_N{};
     std::size_t max_simultaneous_contacts = 0;  ///< loaded contacts

@@ -430,6 +430,8 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         Eigen::Matrix3d stiffness_N_per_mm;  // world frame
     };
     std::vector<LoadStiffness> load_stiffness;
+    std::vector<NodalLoad> loads;           // body frame, as the effects gave them
+    std::vector<std::size_t> loads_end_of;  // per effect: loads.size() after its turn
     // The shaft outside the body is carried by the hand and the box: gravity acts inside only.
     Eigen::VectorXd f_ext = scope_.gravity_load(gravity_);
     for (std::size_t k = 0; k < nodes; ++k)
@@ -450,9 +452,10 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             view.scope_velocities_mm_per_s.push_back(node_velocity_mm_per_s(k));
             view.scope_axes.push_back(node_axis(k));
         }
-        std::vector<NodalLoad> loads;
-        for (const auto& e : effects_)
+        for (const auto& e : effects_) {
             e->add_scope_loads(view, loads);
+            loads_end_of.push_back(loads.size());
+        }
         for (const NodalLoad& l : loads) {
             if (l.node >= nodes || !l.force_N.allFinite() || !l.moment_Nmm.allFinite() ||
                 !l.stiffness_N_per_mm.allFinite()) {
@@ -842,6 +845,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             candidates[a].frame * Eigen::Vector3d(forces[a][0], forces[a][1], forces[a][2]);
     }
     roll_rad_ += wrap_pi(roll_of(scope_.rotation(0)) - wrap_pi(roll_rad_));
+    note_effect_forces(loads, loads_end_of, held, increment_total);
     report.contacts = nc;
     report.ok = true;
     return report;
@@ -850,6 +854,34 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
 }  // namespace scopekin::model
 
 namespace scopekin::model {
+
+void World::note_effect_forces(const std::vector<NodalLoad>& loads,
+                               const std::vector<std::size_t>& loads_end_of,
+                               const std::vector<bool>& held,
+                               const Eigen::VectorXd& increment_total) {
+    effect_force_N_.assign(effects_.size(), Eigen::Vector3d::Zero());
+    std::size_t first = 0;
+    for (std::size_t e = 0; e < loads_end_of.size() && e < effects_.size(); ++e) {
+        for (std::size_t i = first; i < loads_end_of[e]; ++i) {
+            const NodalLoad& l = loads[i];
+            const auto at = static_cast<Eigen::Index>(6 * l.node);
+            // At the step's end, as the step applied it: F - K d for a position-following load.
+            Eigen::Vector3d force_N = l.force_N;
+            if (!held[l.node])
+                force_N -=
+                    l.stiffness_N_per_mm * rotation_.transpose() * increment_total.segment<3>(at);
+            effect_force_N_[e] += rotation_ * force_N;
+        }
+        first = loads_end_of[e];
+    }
+}
+
+double World::effect_force_N(const std::string& effect_name) const {
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    for (std::size_t e = 0; e < effects_.size() && e < effect_force_N_.size(); ++e)
+        if (effects_[e]->name() == effect_name) total += effect_force_N_[e];
+    return total.norm();
+}
 
 long World::tracked_colon_segment(std::size_t node) const {
     return node < tracking_.segment.size() ? tracking_.segment[node] : -1;

@@ -180,6 +180,10 @@ public:
     double roll_rad() const { return roll_rad_; }
     double handle_force_N() const { return handle_force_N_; }
     double handle_torque_Nmm() const { return handle_torque_Nmm_; }
+    /// |net force| [N] that the truth effects of this name put on the scope over the last step
+    /// (the vector sum of their nodal loads, as applied at the step's end; 0 without such an
+    /// effect): e.g. "abdominal_pressure", the assistant's hand as the scope feels it.
+    double effect_force_N(const std::string& effect_name) const;
     double scope_length_mm() const { return length_mm_; }
     std::size_t scope_node_count() const { return scope_.node_count(); }
     double arc_from_tip_mm(std::size_t node) const {
@@ -250,6 +254,10 @@ public:
     void restore(const State& saved);
 
 private:
+    /// Keeps each effect's net load of the step just accepted (effect_force_N).
+    void note_effect_forces(const std::vector<NodalLoad>& loads,
+                            const std::vector<std::size_t>& loads_end_of,
+                            const std::vector<bool>& held, const Eigen::VectorXd& increment_total);
     using Problem = contact::ContactProblem<double, kMaxWorldContacts>;
     using Forces = contact::ContactForces<double, kMaxWorldContacts>;
 
@@ -299,6 +307,7 @@ private:
     double roll_rad_ = 0;
     double handle_force_N_ = 0;
     double handle_torque_Nmm_ = 0;
+    std::vector<Eigen::Vector3d> effect_force_N_;  ///< per effects_ entry, world frame
     Eigen::VectorXd velocity_;
     std::vector<ColonPointForce> colon_forces_;  // on the colon, computation frame
     std::vector<ColonPointForce>

@@ -505,14 +505,14 @@ TEST(PhysicianScenario, KeyIsReadWithItsStyleDefaults) {
     }
     const Scenario firm = read_scenario(
         physician_doc(
-            {{"style", "careful_expert"}, {"seed", 1}, {"pressure_stiffness_N_per_mm2", 0.7}}),
+            {{"style", "careful_expert"}, {"seed", 1}, {"pressure_stiffness_N_per_mm2", 0.07}}),
         "s.json");
-    EXPECT_EQ(firm.physician->pressure_stiffness_N_per_mm2, std::optional<double>(0.7));
+    EXPECT_EQ(firm.physician->pressure_stiffness_N_per_mm2, std::optional<double>(0.07));
     EXPECT_EQ(
         Physician(*firm.physician, 100.0, 0.0, 1700.0).parameters().pressure_stiffness_N_per_mm2,
-        0.7);
+        0.07);
     EXPECT_EQ(Physician(*m.physician, 100.0, 0.0, 1700.0).parameters().pressure_stiffness_N_per_mm2,
-              0.07);  // the style's
+              0.7);  // the style's
     // With a patient too.
     nlohmann::json patient = physician_doc({{"style", "careful_expert"}, {"seed", 1}});
     patient.erase("colon");

@@ -308,6 +308,42 @@ TEST(AbdominalPressure, ReadFromTheScenarioAndRun) {
     EXPECT_DOUBLE_EQ(defaults.abdominal_pressure[0].ramp_s, 0.2);  // 1 s, but at most the window
 }
 
+TEST(AbdominalPressure, TheHandsForceOnTheScopeIsReportedOnlyWhileItPresses) {
+    // The window is [2, 2.5) s with a 0.1 s ramp, on a scope pushed at 50 mm/s into a 115 degree
+    // bend whose outer wall it bows against by then: the world reports the hand's net force on
+    // the scope while the window is open, none before or after, and the run's summary keeps its
+    // peak and time.
+    nlohmann::json doc = scenario_with_pressure();
+    doc["procedure"][0]["end_s"] = 3.0;
+    doc["abdominal_pressure"][0]["start_s"] = 2.0;
+    doc["abdominal_pressure"][0]["end_s"] = 2.5;
+    doc["abdominal_pressure"][0]["stiffness_N_per_mm2"] = 0.5;
+    const Scenario s = read_scenario(doc, "s.json");
+    auto world = build_world(s);
+    double before_N = 0, during_peak_N = 0, after_N = 0;
+    SimulationCallbacks callbacks;
+    callbacks.on_step = [&](const World& w, const WorldStepReport&) {
+        const double f = w.effect_force_N("abdominal_pressure");
+        EXPECT_TRUE(std::isfinite(f));
+        if (w.time_s() < 2.0 - 1e-9)
+            before_N = std::max(before_N, f);
+        else if (w.time_s() < 2.5 - 1e-9)
+            during_peak_N = std::max(during_peak_N, f);
+        else if (w.time_s() > 2.5 + 1e-9)
+            after_N = std::max(after_N, f);
+    };
+    const SimulationSummary sum = run_simulation(*world, s, callbacks);
+    ASSERT_TRUE(sum.complete) << sum.message;
+    EXPECT_EQ(before_N, 0.0);
+    EXPECT_EQ(after_N, 0.0);
+    EXPECT_GT(during_peak_N, 0.1);
+    EXPECT_DOUBLE_EQ(sum.max_assistant_pressure_force_N, during_peak_N);
+    EXPECT_GT(sum.assistant_pressing_s, 0.0);
+    EXPECT_LE(sum.assistant_pressing_s, 0.5 + 1e-9);
+    EXPECT_LE(sum.assistant_pressure_impulse_Ns, during_peak_N * sum.assistant_pressing_s + 1e-12);
+    EXPECT_EQ(world->effect_force_N("no_such_effect"), 0.0);
+}
+
 TEST(AbdominalPressure, AFirmHandPressedAtOnceKeepsTheStepPhysical) {
     // The firmest hand the scenario takes (1 N/mm per mm of scope), at once, on a scope pushed
     // at 50 mm/s into a 115 degree bend: 10 N/mm on a node of 2.5 g, forty times its M/h^2 at a
