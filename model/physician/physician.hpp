@@ -100,6 +100,10 @@ struct PhysicianStyleParameters {
     /// development experts 20 N (median of the runs' means while pressing; 16 N at 0.07) and at
     /// most 67 N (38 N), model/physician/README.md.
     double pressure_stiffness_N_per_mm2 = 0.7;
+    /// The most the assistant's hand gives over one region [N] (the sum of the region's nodal
+    /// forces; SceneControl::pressure_max_force_N): a stated guess, a firm two-handed press of
+    /// about 5 kg; no measured figure for an assistant's hand was found.
+    double pressure_max_force_N = 50;
     std::size_t max_reductions = 8;  ///< a loop after this many: gives up
     // Giving up.
     double stall_give_up_s = 90;  ///< no new ground (20 mm along the colon) for this long

@@ -70,6 +70,7 @@ PhysicianSource::PhysicianSource(const World& world, const PhysicianSpec& spec,
     control_->steering_follows_turn = physician_.parameters().steering_follows_turn;
     control_->steering_holds_curvature = physician_.parameters().steering_holds_curvature;
     control_->pressure_stiffness_N_per_mm2 = physician_.parameters().pressure_stiffness_N_per_mm2;
+    control_->pressure_max_force_N = physician_.parameters().pressure_max_force_N;
     state_.roll_deg = world.roll_rad() * 180.0 / M_PI;
 }
 

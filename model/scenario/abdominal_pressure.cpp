@@ -22,6 +22,20 @@ void push_pressure(std::vector<NodalLoad>& loads, const effects::NodeBeyondRestW
                      k_N_per_mm * n.outward * n.outward.transpose()});
 }
 
+/// One hand over a region gives at most `max_force_N` (the sum of its |F|): beyond, every force
+/// and stiffness of the region is scaled down by the same factor.
+void give_way_beyond(double max_force_N, std::vector<NodalLoad>& region_loads) {
+    double total_N = 0.0;
+    for (const NodalLoad& l : region_loads)
+        total_N += l.force_N.norm();
+    if (!(total_N > max_force_N)) return;
+    const double scale = max_force_N / total_N;
+    for (NodalLoad& l : region_loads) {
+        l.force_N *= scale;
+        l.stiffness_N_per_mm *= scale;
+    }
+}
+
 }  // namespace
 
 AbdominalPressure::AbdominalPressure(std::vector<AbdominalPressureWindow> windows)
@@ -59,11 +73,17 @@ void AbdominalPressure::add_scope_loads(const WorldEffectView& view,
             any = any || k_N_per_mm2[r] > 0.0;
         }
         if (!any) return;
+        std::array<std::vector<NodalLoad>, 8> by_region;
         effects::for_each_node_beyond_rest_wall(
             view, [&](ColonRegion r) { return k_N_per_mm2[static_cast<std::size_t>(r)] > 0.0; },
             [&](const effects::NodeBeyondRestWall& n) {
-                push_pressure(loads, n, k_N_per_mm2[static_cast<std::size_t>(n.region)]);
+                const auto r = static_cast<std::size_t>(n.region);
+                push_pressure(by_region[r], n, k_N_per_mm2[r]);
             });
+        for (std::vector<NodalLoad>& region_loads : by_region) {
+            give_way_beyond(control_->pressure_max_force_N, region_loads);
+            loads.insert(loads.end(), region_loads.begin(), region_loads.end());
+        }
         return;
     }
     const AbdominalPressureWindow* window = nullptr;

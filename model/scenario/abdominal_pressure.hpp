@@ -16,6 +16,13 @@
 // from 0): a firm hand switched on within one step jolts the stiff shaft. The same law as the truth effect
 // mesenteric_retraction, but switched on in time windows and over chosen regions: it is what
 // the assistant does, not a property of the patient. The firmware never sees it.
+//
+// A hand that gives way (a physician's assistant, SceneControl): a spring without a limit answers
+// a loop that has already bowed far out with hundreds of newtons, more than a hand passes through
+// the abdominal wall. Each region's hand gives at most SceneControl::pressure_max_force_N: where
+// the sum of |F| over the region's nodes exceeds it, the region's forces and stiffnesses are
+// scaled down by the same factor (the hand keeps its direction and yields in proportion). Scripted
+// windows are the experimenter's spring and have no limit.
 #include <memory>
 #include <vector>
 
