@@ -97,11 +97,11 @@ struct PhysicianStyleParameters {
     /// The assistant's firmness when pressing (model/scenario/abdominal_pressure.hpp) [N/mm per mm
     /// of scope], a stated guess: ten times the demo's 0.07, a hand that holds the bowel where it
     /// is rather than one that leans on it. Its net force on the scope stays a hand's: on the 12
-    /// development experts 20 N (median of the runs' means while pressing; 16 N at 0.07) and at
-    /// most 67 N (38 N), model/physician/README.md.
+    /// development experts 20 N (median of the runs' means while pressing; 16 N at 0.07), and at
+    /// most pressure_max_force_N per region (model/physician/README.md).
     double pressure_stiffness_N_per_mm2 = 0.7;
-    /// The most the assistant's hand gives over one region [N] (the sum of the region's nodal
-    /// forces; SceneControl::pressure_max_force_N): a stated guess, a firm two-handed press of
+    /// The most the assistant's hand gives over one region [N] (the net force on the region's
+    /// nodes; SceneControl::pressure_max_force_N): a stated guess, a firm two-handed press of
     /// about 5 kg; no measured figure for an assistant's hand was found.
     double pressure_max_force_N = 50;
     std::size_t max_reductions = 8;  ///< a loop after this many: gives up

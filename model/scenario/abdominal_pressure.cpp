@@ -22,14 +22,14 @@ void push_pressure(std::vector<NodalLoad>& loads, const effects::NodeBeyondRestW
                      k_N_per_mm * n.outward * n.outward.transpose()});
 }
 
-/// One hand over a region gives at most `max_force_N` (the sum of its |F|): beyond, every force
-/// and stiffness of the region is scaled down by the same factor.
+/// One hand over a region gives at most `max_force_N` (|net force| on its nodes): beyond, every
+/// force and stiffness of the region is scaled down by the same factor.
 void give_way_beyond(double max_force_N, std::vector<NodalLoad>& region_loads) {
-    double total_N = 0.0;
+    Eigen::Vector3d net_N = Eigen::Vector3d::Zero();
     for (const NodalLoad& l : region_loads)
-        total_N += l.force_N.norm();
-    if (!(total_N > max_force_N)) return;
-    const double scale = max_force_N / total_N;
+        net_N += l.force_N;
+    if (!(net_N.norm() > max_force_N)) return;
+    const double scale = max_force_N / net_N.norm();
     for (NodalLoad& l : region_loads) {
         l.force_N *= scale;
         l.stiffness_N_per_mm *= scale;

@@ -20,7 +20,8 @@
 // A hand that gives way (a physician's assistant, SceneControl): a spring without a limit answers
 // a loop that has already bowed far out with hundreds of newtons, more than a hand passes through
 // the abdominal wall. Each region's hand gives at most SceneControl::pressure_max_force_N: where
-// the sum of |F| over the region's nodes exceeds it, the region's forces and stiffnesses are
+// the net force on the region's nodes (their vector sum: what the hand must supply; forces that
+// cancel are the abdomen's confinement) exceeds it, the region's forces and stiffnesses are
 // scaled down by the same factor (the hand keeps its direction and yields in proportion). Scripted
 // windows are the experimenter's spring and have no limit.
 #include <memory>

@@ -37,8 +37,8 @@ struct SceneControl {
     std::array<std::optional<double>, 8> pressure_since_s{};
     double pressure_stiffness_N_per_mm2 = 0.07;
     double pressure_ramp_s = 1.0;
-    /// The most one hand gives over a region [N]: the sum of |F| over the region's nodes is
-    /// scaled down to it (abdominal_pressure.hpp, "A hand that gives way").
+    /// The most one hand gives over a region [N]: the region's net force (the vector sum over its
+    /// nodes) is scaled down to it (abdominal_pressure.hpp, "A hand that gives way").
     double pressure_max_force_N = 50.0;
 
     bool pressing() const {

@@ -77,8 +77,9 @@ TEST(AbdominalPressure, PressesBowingNodesBackInsideItsWindowAndRegions) {
 TEST(AbdominalPressure, APhysiciansAssistantGivesWayBeyondWhatAHandGives) {
     // The three-node view of the test above, pressed by a physician's assistant (SceneControl)
     // from t = 0, fully in at t = 15 s. Node 0 pushes the wall out by 3.65 mm over 5 mm of scope,
-    // node 1 by 11.65 mm over 10 mm: at k = 1 N/mm per mm the spring asks 18.25 + 116.5 =
-    // 134.75 N, beyond the hand's 50 N, so both forces and stiffnesses shrink by 50 / 134.75.
+    // node 1 by 11.65 mm over 10 mm: at k = 1 N/mm per mm the spring asks 18.25 N along -y and
+    // 116.5 N along -z, a net 117.92 N, beyond the hand's 50 N, so both forces and stiffnesses
+    // shrink by 50 / 117.92.
     const ColonTube sigmoid = straight_tube(400.0, 15.0, ColonRegion::sigmoid, kScopeRadius);
     auto control = std::make_shared<SceneControl>();
     control->pressure_since_s[static_cast<std::size_t>(ColonRegion::sigmoid)] = 0.0;
@@ -88,13 +89,13 @@ TEST(AbdominalPressure, APhysiciansAssistantGivesWayBeyondWhatAHandGives) {
     std::vector<NodalLoad> loads;
     hand.add_scope_loads(testing::three_node_view(sigmoid, 15.0), loads);
     ASSERT_EQ(loads.size(), 2u);
-    const double scale = 50.0 / 134.75;
+    const double scale = 50.0 / std::hypot(18.25, 116.5);
     EXPECT_NEAR(loads[0].force_N.y(), -18.25 * scale, 1e-12);
     EXPECT_NEAR(loads[1].force_N.z(), -116.5 * scale, 1e-12);
     EXPECT_NEAR(loads[1].stiffness_N_per_mm(2, 2), 10.0 * scale, 1e-12);
-    EXPECT_NEAR(loads[0].force_N.norm() + loads[1].force_N.norm(), 50.0, 1e-12);
+    EXPECT_NEAR((loads[0].force_N + loads[1].force_N).norm(), 50.0, 1e-12);
 
-    // A softer hand (0.07: 9.43 N in all) stays below the limit and is the spring itself.
+    // A softer hand (0.07: 8.25 N net) stays below the limit and is the spring itself.
     control->pressure_stiffness_N_per_mm2 = 0.07;
     loads.clear();
     hand.add_scope_loads(testing::three_node_view(sigmoid, 15.0), loads);
