@@ -28,8 +28,9 @@ void give_way_beyond(double max_force_N, std::vector<NodalLoad>& region_loads) {
     Eigen::Vector3d net_N = Eigen::Vector3d::Zero();
     for (const NodalLoad& l : region_loads)
         net_N += l.force_N;
-    if (!(net_N.norm() > max_force_N)) return;
-    const double scale = max_force_N / net_N.norm();
+    const double net_force_N = net_N.norm();
+    if (!(net_force_N > max_force_N)) return;
+    const double scale = max_force_N / net_force_N;
     for (NodalLoad& l : region_loads) {
         l.force_N *= scale;
         l.stiffness_N_per_mm *= scale;

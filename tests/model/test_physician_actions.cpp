@@ -338,17 +338,22 @@ TEST(AbdominalPressure, ReadFromTheScenarioAndRun) {
     EXPECT_DOUBLE_EQ(defaults.abdominal_pressure[0].ramp_s, 0.2);  // 1 s, but at most the window
 }
 
+/// scenario_with_pressure's push at 50 mm/s, run for 3 s, with its pressure window changed.
+nlohmann::json pushed_for_3_s_pressed(double start_s, double end_s, double stiffness_N_per_mm2) {
+    nlohmann::json doc = scenario_with_pressure();
+    doc["procedure"][0]["end_s"] = 3.0;
+    doc["abdominal_pressure"][0]["start_s"] = start_s;
+    doc["abdominal_pressure"][0]["end_s"] = end_s;
+    doc["abdominal_pressure"][0]["stiffness_N_per_mm2"] = stiffness_N_per_mm2;
+    return doc;
+}
+
 TEST(AbdominalPressure, TheHandsForceOnTheScopeIsReportedOnlyWhileItPresses) {
     // The window is [2, 2.5) s with a 0.1 s ramp, on a scope pushed at 50 mm/s into a 115 degree
     // bend whose outer wall it bows against by then: the world reports the hand's net force on
     // the scope while the window is open, none before or after, and the run's summary keeps its
     // peak and time.
-    nlohmann::json doc = scenario_with_pressure();
-    doc["procedure"][0]["end_s"] = 3.0;
-    doc["abdominal_pressure"][0]["start_s"] = 2.0;
-    doc["abdominal_pressure"][0]["end_s"] = 2.5;
-    doc["abdominal_pressure"][0]["stiffness_N_per_mm2"] = 0.5;
-    const Scenario s = read_scenario(doc, "s.json");
+    const Scenario s = read_scenario(pushed_for_3_s_pressed(2.0, 2.5, 0.5), "s.json");
     auto world = build_world(s);
     double before_N = 0, during_peak_N = 0, after_N = 0;
     SimulationCallbacks callbacks;
@@ -380,10 +385,7 @@ TEST(AbdominalPressure, AFirmHandPressedAtOnceKeepsTheStepPhysical) {
     // 5 ms step. Applied explicitly (the force from the step's start) such a spring overshoots
     // by more than it corrects; it did: a 4,347 N contact at 2.12 s. Taken implicitly the run
     // stays with the forces of a 50 mm/s push: a few newtons at the handle.
-    nlohmann::json doc = scenario_with_pressure();
-    doc["procedure"][0]["end_s"] = 3.0;
-    doc["abdominal_pressure"][0]["end_s"] = 3.0;
-    doc["abdominal_pressure"][0]["stiffness_N_per_mm2"] = 1.0;
+    nlohmann::json doc = pushed_for_3_s_pressed(0.1, 3.0, 1.0);
     doc["abdominal_pressure"][0]["ramp_s"] = 0.0;
     const Scenario s = read_scenario(doc, "s.json");
     auto world = build_world(s);
