@@ -142,6 +142,7 @@ void SensorBox::run_period(std::uint64_t now_us, std::uint32_t period_overruns) 
 
     // publish
     publish_outputs();
+    static_assert(kinetics::kAllFaultFlags <= 0xFFFFU, "KineticFaults is 16 bits on the wire");
     const auto kinetic_faults = static_cast<std::uint16_t>(outputs_.fault_flags & 0xFFFFU);
     const std::uint8_t tracker_faults = tracker_faults_;
     const bool faults_changed = kinetic_faults != last_status_kinetic_faults_ ||

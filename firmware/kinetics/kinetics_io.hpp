@@ -79,6 +79,8 @@ enum FaultFlag : std::uint32_t {
     /// cell's last valid reading (kinetics.hpp, "A stale force cell") until it returns.
     kFaultForceBlind = 1U << 14U,
 };
+/// Every FaultFlag bit (a new flag moves this to its own bit; checks reject any bit beyond).
+inline constexpr std::uint32_t kAllFaultFlags = (kFaultForceBlind << 1U) - 1U;
 
 /// Contact state of a station (mirrors contact::ContactState).
 enum class StationState : std::uint8_t {

@@ -37,6 +37,8 @@ enum BoxFault : std::uint16_t {
     /// period ran, or the newest handle sample it read was older than a period (not fresh)
     kBoxFaultReceiveBacklog = 1U << 14U,
 };
+/// Every BoxFault bit (a new fault moves this to its own bit; checks reject any bit beyond).
+inline constexpr std::uint16_t kAllBoxFaults = (kBoxFaultReceiveBacklog << 1U) - 1U;
 
 /// BoxStatus.TrackerFaults: the EM tracker / tip force sensor (0 without a serial port).
 enum TrackerFault : std::uint8_t {

@@ -29,6 +29,8 @@
 
 #include "fuzz_support.hpp"
 #include "host_sim/replay/candump_replay.hpp"
+#include "kinetics/kinetics_io.hpp"
+#include "messages/box_faults.hpp"
 #include "protocol/can/scopekin_messages.hpp"
 
 namespace {
@@ -133,8 +135,8 @@ void check_replay(const host_sim::CandumpLog& log) {
             require(period.time_us >= last_time);
             last_time = period.time_us;
             require(period.outputs != nullptr);
-            require((period.box_faults & ~0x7FFFU) == 0U);
-            require((period.outputs->fault_flags & ~0x3FFFU) == 0U);
+            require((period.box_faults & ~scopekin::messages::kAllBoxFaults) == 0U);
+            require((period.outputs->fault_flags & ~scopekin::kinetics::kAllFaultFlags) == 0U);
             ++periods_seen;
         });
     require(result.periods == periods_seen);

@@ -68,8 +68,6 @@ using namespace scopekin::messages;
 
 using scopekin::fuzz::Script;
 
-constexpr std::uint16_t kAllBoxFaults = (1U << 15U) - 1U;
-constexpr std::uint32_t kAllKineticFaults = (1U << 15U) - 1U;
 constexpr std::size_t kMaxPeriods = 48;
 
 /// The box and its world: the loopback wire and serial line on a simulated clock.
@@ -186,7 +184,7 @@ void check_period(Bench& bench, Tracking& tracking, bool overran, bool bus_off) 
     require(c.frames_read == can.received + can.error_frames);
 
     require((faults & ~kAllBoxFaults) == 0U);
-    require((out.fault_flags & ~kAllKineticFaults) == 0U);
+    require((out.fault_flags & ~kinetics::kAllFaultFlags) == 0U);
     require(((faults & kBoxFaultPeriodOverrun) != 0U) == overran);
     require(((faults & kBoxFaultReceiveDropped) != 0U) == (can.dropped != tracking.can.dropped));
     if (c.frames_read - tracking.counters.frames_read == scopekin::executive::kMaxFramesPerPeriod) {

@@ -560,6 +560,13 @@ def candump_replay_seeds(messages, rng):
         for m in sorted(outputs, key=lambda m: (m.id != 0x181, m.id)):
             box.append(candump_line(tp // 1000000, tp % 1000000, "can0", m.id, m.pack(valid_raws(m, rng))))
     seeds["box_log"] = b"".join(box)
+    # The force cell falls silent for 150 ms while the encoder goes on: force stale, then (after
+    # 20 stale periods) force_blind, KineticFaults bit 14 (regression: the check's mask lacked it).
+    lost, lost_rng = lines[:20], random.Random("scopekin-fuzz-force-cell-lost")
+    for k in range(10, 160):
+        t = t0 + 1000 * k
+        lost.append(candump_line(t // 1000000, t % 1000000 + 500, "vcan0", ir.id, ir.pack(valid_raws(ir, lost_rng))))
+    seeds["regression_force_cell_lost"] = b"".join(lost)
     seeds["foreign_and_error_frames"] = (
         candump_line(1, 0, "vcan0", 0x120, b"\x01" * 8)
         + b"(1.000100) vcan0 20000004#0004000000000000\n"
