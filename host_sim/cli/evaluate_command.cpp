@@ -56,7 +56,7 @@ struct MergeOptions {
 };
 
 struct TuneOptions {
-    std::string dir;
+    std::vector<std::string> dirs;
     std::string out;
     double max_false_per_10min = 3.0;
 };
@@ -448,8 +448,10 @@ int run_merge(const MergeOptions& options) {
     return status;
 }
 
-int run_tune(const TuneOptions& options) {
-    const fs::path dir(options.dir);
+/// The complete cases of one evaluated set (DIR/scorecard.json) appended to `cases`, and the set's
+/// manifest name; false (the message printed) for a set that cannot be tuned on.
+bool read_tuning_set(const fs::path& dir, std::vector<evaluate::TuningCase>& cases,
+                     std::string& manifest) {
     nlohmann::json scorecard;
     try {
         scorecard = model::io::parse_json_file((dir / "scorecard.json").string());
@@ -457,21 +459,15 @@ int run_tune(const TuneOptions& options) {
         std::cerr << "scopekin evaluate-tune: " << e.what()
                   << " (give the --out DIR of `scopekin evaluate` on the development set, or "
                      "of `scopekin evaluate-merge`)\n";
-        return 2;
+        return false;
     }
-    const std::string manifest = scorecard.value("manifest", "");
+    manifest = scorecard.value("manifest", "");
     if (manifest.find("validation") != std::string::npos) {
         std::cerr << "scopekin evaluate-tune: " << (dir / "scorecard.json").string()
                   << ": the set is '" << manifest
                   << "': the validation set is never tuned on (tune on the development set)\n";
-        return 2;
+        return false;
     }
-    if (!(options.max_false_per_10min >= 0) || !std::isfinite(options.max_false_per_10min)) {
-        std::cerr << "scopekin evaluate-tune: --max-false-per-10min must be a finite number >= "
-                     "0\n";
-        return 2;
-    }
-    std::vector<evaluate::TuningCase> cases;
     for (const nlohmann::json& c : scorecard.value("cases", nlohmann::json::array())) {
         if (c.value("status", "") != "complete") continue;
         const fs::path folder = dir / c.value("folder", "");
@@ -482,15 +478,41 @@ int run_tune(const TuneOptions& options) {
                              run.loop_episodes, run.warning_episodes, run.critical_episodes});
         } catch (const evaluate::CaseDataError& e) {
             std::cerr << "scopekin evaluate-tune: " << e.what() << "\n";
+            return false;
+        }
+    }
+    return true;
+}
+
+int run_tune(const TuneOptions& options) {
+    if (!(options.max_false_per_10min >= 0) || !std::isfinite(options.max_false_per_10min)) {
+        std::cerr << "scopekin evaluate-tune: --max-false-per-10min must be a finite number >= "
+                     "0\n";
+        return 2;
+    }
+    std::vector<evaluate::TuningCase> cases;
+    std::string manifest;
+    std::string dirs;
+    for (const std::string& dir : options.dirs) {
+        std::string set;
+        if (!read_tuning_set(fs::path(dir), cases, set)) return 2;
+        manifest += (manifest.empty() ? "" : "+") + set;
+        dirs += (dirs.empty() ? "" : " ") + dir;
+    }
+    if (cases.empty()) {
+        std::cerr << "scopekin evaluate-tune: " << dirs << " holds no complete case\n";
+        return 2;
+    }
+    std::set<std::string> names;
+    for (const evaluate::TuningCase& c : cases) {
+        if (!names.insert(c.name).second) {
+            std::cerr << "scopekin evaluate-tune: case '" << c.name
+                      << "' is given twice (a set given twice, or two sets that share a case)\n";
             return 2;
         }
     }
-    if (cases.empty()) {
-        std::cerr << "scopekin evaluate-tune: " << dir.string() << " holds no complete case\n";
-        return 2;
-    }
     Json tuned = evaluate::tune_force_monitor(cases, options.max_false_per_10min, manifest);
-    tuned["command"] = "scopekin evaluate-tune " + options.dir + " --out " + options.out +
+    tuned["command"] = "scopekin evaluate-tune " + dirs + " --out " + options.out +
                        " --max-false-per-10min " + std::to_string(options.max_false_per_10min);
     try {
         write_json(options.out, tuned);
@@ -575,12 +597,16 @@ void add_evaluate_commands(CLI::App& app) {
     auto tune = std::make_shared<TuneOptions>();
     CLI::App* t = app.add_subcommand(
         "evaluate-tune",
-        "Tune the handle force monitor baseline's thresholds on an evaluated DEVELOPMENT set "
-        "(DIR: the --out of `scopekin evaluate` or `evaluate-merge`; a set named 'validation' is "
-        "refused): per alarm, a grid search for the most true episodes detected within 0.5 s "
+        "Tune the handle force monitor baseline's thresholds on evaluated DEVELOPMENT sets "
+        "(DIR...: the --out of `scopekin evaluate` or `evaluate-merge`, their cases pooled; a set "
+        "named 'validation' is refused): per alarm, a grid search for the most true episodes "
+        "detected within 0.5 s "
         "with at most --max-false-per-10min false alarms per 10 minutes, pooled over the cases "
         "(host_sim/evaluate/README.md). Writes the thresholds file `scopekin evaluate` reads.");
-    t->add_option("dir", tune->dir, "An evaluated development set")->required();
+    t->add_option("dirs", tune->dirs,
+                  "Evaluated development sets, one or more (e.g. development and "
+                  "development_extra); their complete cases are pooled")
+        ->required();
     t->add_option("--out", tune->out,
                   "Thresholds file (e.g. host_sim/evaluate/force_monitor_thresholds.json)")
         ->required();

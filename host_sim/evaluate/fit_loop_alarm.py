@@ -2,7 +2,7 @@
 """Fits the box's loop alarm from evidence (firmware/kinetics/evidence_alarm.hpp) on an evaluation
 of the development set and writes its trees and settings as the firmware's C++ source.
 
-usage: fit_loop_alarm.py EVAL_DIR --out loop_alarm.cpp [--report fit.json]
+usage: fit_loop_alarm.py EVAL_DIR [EVAL_DIR ...] --out loop_alarm.cpp [--report fit.json]
 
 EVAL_DIR is the output of `scopekin evaluate model/scenarios/evaluation/development.json`. The
 features are the slack regressor's 14 (fit_slack_regressor.py computes them the same way); the
@@ -15,7 +15,7 @@ below raise - HYSTERESIS for CLEAR_STEPS periods (the firmware's debounce, evalu
 same Q16.16 grid).
 
 The raise level is chosen on the development set only, with each patient left out of the fit in
-turn: the level that detects the most episodes within 0.5 s with at most BUDGET_PER_10MIN false
+turn (12 groups of patients beyond 12 patients: fit_slack_regressor.patient_folds): the level that detects the most episodes within 0.5 s with at most BUDGET_PER_10MIN false
 alarms per 10 minutes (issue 21's bound), ties to fewer false alarms. The report gives every
 level's held-out detections and false alarms beside the reduced model's self-lock alarm on the
 same cases. Needs Debian's python3-sklearn and python3-numpy.
@@ -119,7 +119,7 @@ def pooled(cases, alarm_of):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
                                  epilog="Exit status: 0 written, 2 bad input.")
-    ap.add_argument("eval_dir")
+    ap.add_argument("eval_dir", nargs="+", help="one or more evaluation folders (`scopekin evaluate --out`), e.g. development and development_extra")
     ap.add_argument("--out", required=True, help="the C++ source to write")
     ap.add_argument("--report", help="JSON: held-out detections and false alarms per raise level")
     a = ap.parse_args()
@@ -127,13 +127,14 @@ def main():
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
     if len(patients) < 2 or sum(len(c["episodes"]) for c in cases) == 0:
-        print(f"fit_loop_alarm.py: {a.eval_dir}: {len(cases)} complete cases of {len(patients)} patients "
+        print(f"fit_loop_alarm.py: {' '.join(a.eval_dir)}: {len(cases)} complete cases of {len(patients)} patients "
               "with their loop episodes; need at least 2 patients and one episode", file=sys.stderr)
         sys.exit(2)
-    for k, p in enumerate(patients):
-        print(f"fit: leaving out patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
-        m = fit([c for c in cases if patient(c) != p])
-        for c in (c for c in cases if patient(c) == p):
+    folds = features.patient_folds(cases)
+    for k, p in enumerate(folds):
+        print(f"fit: leaving out patients {' '.join(sorted(p))} ({k + 1} of {len(folds)})", file=sys.stderr)
+        m = fit([c for c in cases if patient(c) not in p])
+        for c in (c for c in cases if patient(c) in p):
             c["held_out_score"] = m.predict(c["X"])
     levels = []
     for level in LEVELS:

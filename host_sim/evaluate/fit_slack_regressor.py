@@ -2,7 +2,7 @@
 """Fits the box's slack regressor (firmware/kinetics/slack_regressor.hpp) on an evaluation of the
 development set and writes its trees as the firmware's C++ source.
 
-usage: fit_slack_regressor.py EVAL_DIR --out slack_trees.cpp [--report fit.json]
+usage: fit_slack_regressor.py EVAL_DIR [EVAL_DIR ...] --out slack_trees.cpp [--report fit.json]
                               [--target slack | contact_force]
 
 --target slack (the default) fits depth - the true tip; --target contact_force fits the truth's
@@ -18,7 +18,9 @@ differ from these by rounding only); the target is depth - the true tip along th
 Model: gradient-boosted regression trees (Friedman 2001), squared error, 100 trees of depth 4,
 learning rate 0.05, half the rows per tree, at least 100 rows per leaf, on every 20th period (the
 rows of one case are strongly correlated; more rows change nothing but the time). Before the
-final fit, each patient is left out in turn (leave-one-patient-out): the report gives those
+final fit, each patient is left out in turn (leave-one-patient-out; with more than 12 patients,
+e.g. development and development_extra together, 12 groups of patients dealt round-robin by
+name are left out in turn, patient_folds): the report gives those
 held-out errors per case beside the tip observer's, and the uncertainty law (one SD:
 floor + a * |slack| + b * depth [m]) is fitted to the held-out errors and scaled so that 68 % of
 held-out periods lie within it. Needs Debian's python3-sklearn and python3-numpy.
@@ -162,16 +164,35 @@ TARGETS = {
 }
 
 
-def read_cases(eval_dir, load=None):
-    """Every complete case of an evaluation, read by `load` (default load_case), with progress."""
+def read_cases(eval_dirs, load=None):
+    """Every complete case of one evaluation or several (a folder or a list of folders), read by
+    `load` (default load_case), with progress."""
     load = load or load_case
+    eval_dirs = [eval_dirs] if isinstance(eval_dirs, str) else eval_dirs
+    found = [f for d in eval_dirs for f in sorted(glob.glob(os.path.join(d, "cases", "*", "summary.json")))]
     cases = []
-    for f in sorted(glob.glob(os.path.join(eval_dir, "cases", "*", "summary.json"))):
+    for f in found:
         c = load(os.path.dirname(f))
         print(f"fit: {'read' if c else 'skipped (not complete)'} {os.path.dirname(f)}", file=sys.stderr)
         if c:
             cases.append(c)
     return cases
+
+
+FOLDS = 12  # patients held out together: one each up to 12 patients, then 12 groups
+
+
+def patient_of(case):
+    return case["name"].split("-")[0]
+
+
+def patient_folds(cases):
+    """The held-out groups: each patient alone when there are at most FOLDS, else FOLDS groups of
+    patients dealt round-robin in name order (so a fit's held-out errors stay held out by patient
+    while the number of fits stays bounded)."""
+    patients = sorted({patient_of(c) for c in cases})
+    k = min(FOLDS, len(patients))
+    return [set(patients[i::k]) for i in range(k)]
 
 
 def baseline(c, target):
@@ -182,7 +203,7 @@ def baseline(c, target):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
                                  epilog="Exit status: 0 written, 2 bad input.")
-    ap.add_argument("eval_dir")
+    ap.add_argument("eval_dir", nargs="+", help="one or more evaluation folders (`scopekin evaluate --out`), e.g. development and development_extra")
     ap.add_argument("--out", required=True, help="the C++ source to write")
     ap.add_argument("--report", help="JSON: held-out errors per case, the uncertainty law")
     ap.add_argument("--target", choices=sorted(TARGETS), default="slack",
@@ -191,19 +212,20 @@ def main():
     spec = TARGETS[a.target]
     cases = read_cases(a.eval_dir)
     if len(cases) < 4:
-        print(f"fit_slack_regressor.py: {a.eval_dir}: {len(cases)} complete cases (cases/*/summary.json "
+        print(f"fit_slack_regressor.py: {' '.join(a.eval_dir)}: {len(cases)} complete cases (cases/*/summary.json "
               "with status complete), need at least 4", file=sys.stderr)
         sys.exit(2)
     target = lambda c: c[spec["y"]]
     patient = lambda c: c["name"].split("-")[0]
     patients = sorted({patient(c) for c in cases})
     held_out, per_case = [], []
-    for k, p in enumerate(patients):
-        print(f"fit: leaving out patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
-        train = [c for c in cases if patient(c) != p]
+    folds = patient_folds(cases)
+    for k, p in enumerate(folds):
+        print(f"fit: leaving out patients {' '.join(sorted(p))} ({k + 1} of {len(folds)})", file=sys.stderr)
+        train = [c for c in cases if patient(c) not in p]
         m = model().fit(np.vstack([c["X"][::EVERY] for c in train]),
                         np.concatenate([target(c)[::EVERY] for c in train]))
-        for c in (c for c in cases if patient(c) == p):
+        for c in (c for c in cases if patient(c) in p):
             pred = m.predict(c["X"])
             held_out.append((pred, target(c), c["depth"]))
             per_case.append({"case": c["name"],

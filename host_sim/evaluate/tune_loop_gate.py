@@ -2,7 +2,7 @@
 """Chooses the loop alarm's tracker gate (firmware/kinetics/slack_excess.hpp) and the raise level
 that goes with it, on an evaluation of the development set, with the alarm's trees held out.
 
-usage: tune_loop_gate.py EVAL_DIR --out gate.json [--png gate.png]
+usage: tune_loop_gate.py EVAL_DIR [EVAL_DIR ...] --out gate.json [--png gate.png]
 
 With the bench's EM tracker, the box's loop alarm from evidence counts a period's score only when
 the scope taken up since the tip last kept pace (the truth's pace rule on the tracker's odometry:
@@ -116,18 +116,19 @@ def plot(path, rows):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
                                  epilog="Exit status: 0 written, 2 bad input.")
-    ap.add_argument("eval_dir")
+    ap.add_argument("eval_dir", nargs="+", help="one or more evaluation folders (`scopekin evaluate --out`), e.g. development and development_extra")
     ap.add_argument("--out", required=True, help="the JSON report to write")
     ap.add_argument("--png", help="a picture: detections against false alarms per gate")
     a = ap.parse_args()
     cases = odometer.read_tracker_cases(a.eval_dir, load, "tune_loop_gate.py")
     patient = lambda c: c["name"].split("-")[0]
-    patients = sorted({patient(c) for c in cases})
-    for k, p in enumerate(patients):
-        print(f"tune: the loop alarm's trees without patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
-        trees = loop.fit([c for c in cases if patient(c) != p])
+    folds = loop.features.patient_folds(cases)
+    for k, p in enumerate(folds):
+        print(f"tune: the loop alarm's trees without patients {' '.join(sorted(p))} ({k + 1} of {len(folds)})",
+              file=sys.stderr)
+        trees = loop.fit([c for c in cases if patient(c) not in p])
         for c in cases:
-            if patient(c) == p:
+            if patient(c) in p:
                 c["score"] = trees.predict(c["X"])
                 c["excess"] = excess_at_periods(c)
     rows = []

@@ -2,7 +2,7 @@
 """Chooses the tip odometer's correlation time (firmware/kinetics/tip_odometer.hpp) on an
 evaluation of the development set, with the handle's tip held out.
 
-usage: tune_tip_odometer.py EVAL_DIR --out tune.json [--png tune.png] [--correlations 5,10,20]
+usage: tune_tip_odometer.py EVAL_DIR [EVAL_DIR ...] --out tune.json [--png tune.png] [--correlations 5,10,20]
                             [--sigmoid-reach MM]
 
 The filter pulls the EM tracker's odometry towards the handle's tip, the slack regressor's. In
@@ -82,15 +82,16 @@ def read_tracker(folder, sigmoid_reach_mm):
 
 def held_out_handle(cases):
     """Each case's slack predicted by trees fitted without its patient."""
-    patient = lambda c: c["name"].split("-")[0]
-    patients = sorted({patient(c) for c in cases})
-    for k, p in enumerate(patients):
-        print(f"tune: the handle's trees without patient {p} ({k + 1} of {len(patients)})", file=sys.stderr)
-        train = [c for c in cases if patient(c) != p]
+    patient = slack.patient_of
+    folds = slack.patient_folds(cases)
+    for k, p in enumerate(folds):
+        print(f"tune: the handle's trees without patients {' '.join(sorted(p))} ({k + 1} of {len(folds)})",
+              file=sys.stderr)
+        train = [c for c in cases if patient(c) not in p]
         m = slack.model().fit(np.vstack([c["X"][::slack.EVERY] for c in train]),
                               np.concatenate([c["y"][::slack.EVERY] for c in train]))
         for c in cases:
-            if patient(c) == p:
+            if patient(c) in p:
                 c["slack_mm"] = m.predict(c["X"])
 
 
@@ -160,7 +161,7 @@ def read_tracker_cases(eval_dir, load, script):
     fewer than 2 patients the script exits 2 saying so."""
     cases = slack.read_cases(eval_dir, load)
     if len({c["name"].split("-")[0] for c in cases}) < 2:
-        print(f"{script}: {eval_dir}: {len(cases)} complete cases with EM tracker samples "
+        print(f"{script}: {' '.join([eval_dir] if isinstance(eval_dir, str) else eval_dir)}: {len(cases)} complete cases with EM tracker samples "
               "(cases/*/summary.json with status complete, recording.csv with em_tip_*), need at "
               "least 2 patients", file=sys.stderr)
         sys.exit(2)
@@ -187,7 +188,7 @@ def plot(path, rows, handle):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "),
                                  epilog="Exit status: 0 written, 2 bad input.")
-    ap.add_argument("eval_dir")
+    ap.add_argument("eval_dir", nargs="+", help="one or more evaluation folders (`scopekin evaluate --out`), e.g. development and development_extra")
     ap.add_argument("--out", required=True, help="the JSON report to write")
     ap.add_argument("--png", help="a picture of the errors against the correlation time")
     ap.add_argument("--sigmoid-reach", type=float, default=SIGMOID_REACH_MM, metavar="MM",

@@ -874,6 +874,24 @@ def check_evaluate():
     json.dump(v, open(os.path.join(d, "as_validation", "scorecard.json"), "w"))
     p = run("evaluate-tune", os.path.join(d, "as_validation"), "--out", tuned, expect_status=2)
     expect("never tuned on" in p.stderr, f"tuning on the validation set is refused: {p.stderr}")
+    p = run("evaluate-tune", d, os.path.join(d, "as_validation"), "--out", tuned, expect_status=2)
+    expect("never tuned on" in p.stderr, f"... also beside a development set: {p.stderr}")
+    # Two development sets pool their cases (here the set split in two by its case folders).
+    halves = [os.path.join(d, "half_a"), os.path.join(d, "half_b")]
+    for k, half in enumerate(halves):
+        h = json.load(open(os.path.join(d, "scorecard.json")))
+        h["manifest"], h["cases"] = f"ci_smoke_{'ab'[k]}", h["cases"][k::2]
+        h["cases"] = [dict(c, folder=os.path.relpath(os.path.join(d, c["folder"]), half)) for c in h["cases"]]
+        os.makedirs(half, exist_ok=True)
+        json.dump(h, open(os.path.join(half, "scorecard.json"), "w"))
+    pooled = os.path.join(d, "thresholds_pooled.json")
+    run("evaluate-tune", *halves, "--out", pooled)
+    tp = json.load(open(pooled))
+    expect(tp["tuned_on"]["manifest"] == "ci_smoke_a+ci_smoke_b" and sorted(tp["tuned_on"]["cases"]) ==
+           sorted(t["tuned_on"]["cases"]) and tp["loop"] == t["loop"],
+           f"two halves pooled tune as the whole set: {str(tp)[:300]}")
+    p = run("evaluate-tune", d, d, "--out", pooled, expect_status=2)
+    expect("given twice" in p.stderr, f"a set given twice is refused: {p.stderr}")
     # A scope that went through the colon wall (truth.csv scope_beyond_wall_mm above 40 mm; none
     # here, so one is written in): the case is scored only before that moment, and the scorecard
     # says so.
@@ -951,11 +969,12 @@ def check_evaluate_bad_input():
 
 def check_evaluate_manifests():
     # The committed manifests (model/scenarios/evaluation/): the validation set has >= 40 cases,
-    # >= 20 patients each with both styles, and no patient of the development sets; the scripted
+    # >= 20 patients each with both styles, and no patient of the development sets (development_extra
+    # adds patients, none of development's); the scripted
     # sets are accepted as they are (the physician sets are checked by evaluate_physician_manifests).
     folder = os.path.join(SOURCE, "model", "scenarios", "evaluation")
     sets = {n: json.load(open(os.path.join(folder, n + ".json")))
-            for n in ["ci_smoke", "development_scripted", "development", "validation"]}
+            for n in ["ci_smoke", "development_scripted", "development", "development_extra", "validation"]}
     for n, m in sets.items():
         expect(m["name"] == n, f"{n}.json is named {m['name']}")
     val = sets["validation"]["cases"]
@@ -965,19 +984,22 @@ def check_evaluate_manifests():
         styles.setdefault(c["patient"]["seed"], set()).add(c["physician"]["style"])
     expect(len(styles) >= 20 and all(s >= {"careful_expert", "hurried_trainee"} for s in styles.values()),
            f"validation: >= 20 patients, each with both styles: {styles}")
-    dev_patients = {c["patient"]["seed"] for n in ["development", "development_scripted"]
+    dev_patients = {c["patient"]["seed"] for n in ["development", "development_scripted", "development_extra"]
                     for c in sets[n]["cases"] if "patient" in c}
+    extra = {c["patient"]["seed"] for c in sets["development_extra"]["cases"]}
+    first = {c["patient"]["seed"] for c in sets["development"]["cases"]}
+    expect(not (extra & first), f"development_extra repeats development's patients: {extra & first}")
     expect(not (dev_patients & set(styles)), f"development and validation share patients: {dev_patients & set(styles)}")
     for n in ["ci_smoke", "development_scripted"]:
         run("evaluate", os.path.join(folder, n + ".json"), "--list")
 
 
 def check_evaluate_physician_manifests():
-    # development.json and validation.json need the physicians' generator (scenario key
+    # development.json, development_extra.json and validation.json need the physicians' generator (scenario key
     # "physician"): until it is merged, the scenario reader refuses the key and this check is
     # skipped (exit 77), not failed.
     folder = os.path.join(SOURCE, "model", "scenarios", "evaluation")
-    for n in ["development", "validation"]:
+    for n in ["development", "development_extra", "validation"]:
         p = run("evaluate", os.path.join(folder, n + ".json"), "--list", expect_status=None)
         if p.returncode == 2 and "physician: unknown key" in p.stderr:
             print(f"SKIPPED: {n}.json needs the physicians' procedure generator (not merged yet)")

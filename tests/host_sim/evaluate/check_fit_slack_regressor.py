@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Checks host_sim/evaluate/fit_slack_regressor.py on a synthetic evaluation whose answer is known:
 four patients whose slack is a step function of the push force (40 mm above 10 N, else 0), with
-the observer's tip at the depth (its slack always 0). Leaving each patient out, the trees must
-learn the step (held-out tip error below a quarter of the observer's), the written source must hold
+the observer's tip at the depth (its slack always 0). The cases are in two evaluation folders read
+together; leaving each patient out, the trees must learn the step (held-out tip error below a quarter of the observer's), the written source must hold
 100 trees of depth 4 (15 nodes, 16 leaves each) and the uncertainty law, and bad input must exit 2.
 With --target contact_force the truth's largest station force is a step in the push force too
 (12 N above 10 N of push, else 2 N) where the reduced model said 0 N: the trees must learn it.
@@ -51,13 +51,30 @@ def fit(*args):
 fresh_folder(WORK)
 
 
+def check_patient_folds():
+    """Up to 12 patients each is its own fold; beyond, 12 disjoint groups that cover them all."""
+    sys.path.insert(0, os.path.dirname(FIT))
+    import fit_slack_regressor as fitter
+    few = [{"name": f"p{k}-expert-s1"} for k in range(1, 5)] + [{"name": "p1-trainee-s1"}]
+    expect(sorted(map(sorted, fitter.patient_folds(few))) == [["p1"], ["p2"], ["p3"], ["p4"]],
+           f"four patients, four folds: {fitter.patient_folds(few)}")
+    many = [{"name": f"p{1000 + k}-trainee-s1"} for k in range(36)]
+    folds = fitter.patient_folds(many)
+    covered = [p for f in folds for p in f]
+    expect(len(folds) == 12 and len(covered) == 36 and len(set(covered)) == 36
+           and all(len(f) == 3 for f in folds), f"36 patients, 12 disjoint folds of 3: {folds}")
+
+
 if CHECK == "synthetic":
+    check_patient_folds()
+    # Two evaluation folders (as development and development_extra), two patients each.
     for k in range(4):
-        write_case(WORK, f"p{k + 1}-synthetic-s1", k + 1)
+        write_case(os.path.join(WORK, "a" if k < 2 else "b"), f"p{k + 1}-synthetic-s1", k + 1)
     out, report = os.path.join(WORK, "trees.cpp"), os.path.join(WORK, "fit.json")
-    p = fit(WORK, "--out", out, "--report", report)
+    p = fit(os.path.join(WORK, "a"), os.path.join(WORK, "b"), "--out", out, "--report", report)
     expect(p.returncode == 0, f"the fit exits 0 (got {p.returncode}: {p.stderr[-500:]})")
     r = json.load(open(report))
+    expect(r["cases"] == 4 and r["patients"] == 4, f"both folders read: {r['cases']} cases, {r['patients']} patients")
     held = r["held_out_tip_rms_mm"]
     expect(held["observer"]["median"] > 15, f"the observer misses the slack: {held['observer']}")
     expect(held["regressor"]["median"] < 0.25 * held["observer"]["median"],
@@ -74,7 +91,8 @@ if CHECK == "synthetic":
     expect(r["firmware_vs_sklearn_max_abs"] < 1e-3,
            f"the firmware's integer evaluation matches the learner's: {r['firmware_vs_sklearn_max_abs']}")
     force_out, force_report = os.path.join(WORK, "force_trees.cpp"), os.path.join(WORK, "force_fit.json")
-    p = fit(WORK, "--target", "contact_force", "--out", force_out, "--report", force_report)
+    p = fit(os.path.join(WORK, "a"), os.path.join(WORK, "b"), "--target", "contact_force", "--out", force_out,
+            "--report", force_report)
     expect(p.returncode == 0, f"the force fit exits 0 (got {p.returncode}: {p.stderr[-500:]})")
     held = json.load(open(force_report))["held_out_force_rms_N"]
     expect(held["model"]["median"] > 5, f"the model's 0 N misses the wall force: {held['model']}")
