@@ -87,8 +87,24 @@ struct NeutralColumns {
     std::vector<double> steps;
 };
 
-/// Starts every candidate's fit at its neutral values; returns the Jacobian's runs.
-NeutralColumns neutral_columns(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits) {
+/// Which candidates the model already carries (its truth_effects name them): a model written
+/// by the workflow (model.json) given again with --model. They are not screened: a run may hold
+/// an effect once (model/effects/effect_library.cpp), and the model's value is the one it has.
+std::vector<bool> carried_by_model(const DiscrepancyContext& context) {
+    const std::vector<Candidate>& library = candidate_library();
+    std::vector<bool> carried(library.size(), false);
+    for (const nlohmann::json& e : context.model.truth_effects)
+        for (std::size_t c = 0; c < library.size(); ++c)
+            if (e.is_object() && e.value("name", "") == library[c].name) carried[c] = true;
+    return carried;
+}
+
+constexpr const char* kCarried = "already in the model (its truth_effects): not screened again";
+
+/// Starts every candidate's fit at its neutral values; returns the Jacobian's runs (none for a
+/// candidate the model carries).
+NeutralColumns neutral_columns(const DiscrepancyContext& context, const std::vector<bool>& carried,
+                               std::vector<EffectSetFit>& fits) {
     const std::vector<Candidate>& library = candidate_library();
     NeutralColumns n;
     for (std::size_t c = 0; c < library.size(); ++c) {
@@ -98,6 +114,10 @@ NeutralColumns neutral_columns(const DiscrepancyContext& context, std::vector<Ef
         for (const FittedParameter& p : library[c].parameters)
             x.push_back(p.neutral);
         fits[c].values = x;
+        if (carried[c]) {
+            fits[c].failure = kCarried;
+            continue;
+        }
         if (library[c].name == "sigmoid_mobility")
             continue;  // its own runs (fit_sigmoid_direction)
         for (std::size_t j = 0; j < x.size(); ++j) {
@@ -122,10 +142,11 @@ struct Trials {
 
 Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumns& n,
                           const std::vector<ModelPrediction>& columns, const Eigen::VectorXd& r0,
-                          std::vector<EffectSetFit>& fits) {
+                          const std::vector<bool>& carried, std::vector<EffectSetFit>& fits) {
     const std::vector<Candidate>& library = candidate_library();
     Trials trials;
     for (std::size_t c = 0; c < library.size(); ++c) {
+        if (carried[c]) continue;
         const std::size_t P = library[c].parameters.size();
         Eigen::MatrixXd J(r0.size(), static_cast<Eigen::Index>(P));
         bool ok = true;
@@ -176,11 +197,12 @@ struct GridRuns {
     std::vector<std::pair<std::size_t, std::size_t>> of;  // (candidate, point)
 };
 
-GridRuns grid_runs(const std::vector<EffectSetFit>& fits) {
+GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool>& carried) {
     const std::vector<Candidate>& library = candidate_library();
     GridRuns g;
     g.points.resize(library.size());
     for (std::size_t c = 0; c < library.size(); ++c) {
+        if (carried[c]) continue;
         g.points[c] = screen_grid(library[c].parameters);
         for (std::size_t k = 1; k < g.points[c].size(); ++k) {
             g.lists.push_back(
@@ -237,11 +259,12 @@ Screening screen_candidates(const DiscrepancyContext& context) {
     Screening out;
     std::vector<EffectSetFit>& fits = out.fits;
     fits.resize(library.size());
-    const NeutralColumns n = neutral_columns(context, fits);
+    const std::vector<bool> carried = carried_by_model(context);
+    const NeutralColumns n = neutral_columns(context, carried, fits);
     const std::vector<ModelPrediction> columns =
         context.evaluator.run_all(n.lists, RunScope::fit_training);
-    const Trials steps = gauss_newton_steps(context, n, columns, r0, fits);
-    const GridRuns grid = grid_runs(fits);
+    const Trials steps = gauss_newton_steps(context, n, columns, r0, carried, fits);
+    const GridRuns grid = grid_runs(fits, carried);
     // One batch: the steps over every window (they are scored as they are), the grid over the
     // training ones (it only picks a start).
     std::vector<std::pair<nlohmann::json, RunScope>> requests;
@@ -276,6 +299,11 @@ Screening screen_candidates(const DiscrepancyContext& context) {
     std::vector<std::size_t> needs_held_out;  // candidates started from a grid point, on windows
     for (std::size_t c = 0; c < library.size(); ++c) {
         EffectSetFit& f = fits[c];
+        if (carried[c]) {
+            f.ok = false;
+            report.push_back({{"effect", library[c].name}, {"skipped", kCarried}});
+            continue;
+        }
         const std::vector<double> step = f.values;
         const double step_cost = step_run[c] ? training_cost(runs[*step_run[c]])
                                              : std::numeric_limits<double>::infinity();

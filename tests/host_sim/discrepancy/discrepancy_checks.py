@@ -17,6 +17,7 @@ import sys
 CHECK, SCOPEKIN, WORK, SOURCE = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 # One check also draws the report's plots and has them checked (the others skip them for time).
 PLOTTED = "ei_scale"
+SECOND_PASS = "ei_scale"  # then run again on its own model.json (check_second_pass)
 failures = []
 
 # Procedures (insertion from 20 mm in the default colon; the sigmoid starts 158 mm along it).
@@ -187,6 +188,35 @@ def check_hidden(name):
            f"{most['held_out_rmse_before']:.4g} -> {most['held_out_rmse_after']:.4g}")
     model = json.load(open(os.path.join(out, "model.json")))
     expect(sorted(e["name"] for e in model.get("truth_effects", [])) == sorted(named), "model.json carries the named effects")
+    if name == SECOND_PASS:
+        check_second_pass(work, out, named)
+
+
+def check_second_pass(work, first, named):
+    """The workflow run again with a --model that carries library effects. On the model it wrote
+    (model.json) it completes and finds nothing left. On a model that carries the hidden effect at
+    its neutral value (ei_scale 1.0) the residual is still there: the effects the model carries
+    are not screened again (a run holds an effect once; before, this exited 2), the others are."""
+    recording = os.path.join(work, "recorded", "recording.csv")
+    out = os.path.join(work, "second_pass")
+    run("discrepancy", recording, "--model", os.path.join(first, "model.json"), "--out", out, "--no-plots", "--quiet")
+    r = json.load(open(os.path.join(out, "report.json")))
+    expect(r["verdict"] == "none", f"second pass on model.json: verdict none (got {r['verdict']})")
+    neutral = json.load(open(os.path.join(first, "model.json")))
+    neutral["truth_effects"] = [{"name": n, "factor": 1.0} for n in named]
+    neutral_path = os.path.join(work, "neutral_model.json")
+    with open(neutral_path, "w") as f:
+        json.dump(neutral, f, indent=1)
+    out = os.path.join(work, "neutral_pass")
+    run("discrepancy", recording, "--model", neutral_path, "--out", out, "--no-plots", "--quiet")
+    r = json.load(open(os.path.join(out, "report.json")))
+    screened = (r.get("screening") or {}).get("candidates", [])
+    skipped = sorted(c["effect"] for c in screened if "skipped" in c)
+    expect(skipped == sorted(named), f"a model carrying {named}: they are not screened again: {skipped}")
+    expect(len(screened) == 6 and all("gauss_newton_step" in c for c in screened if "skipped" not in c),
+           f"... and the other library effects are: {[c['effect'] for c in screened]}")
+    again = [e["name"] for e in r["effects"]]
+    expect(not set(again) & set(named), f"... none of them is named again: {again} (verdict {r['verdict']})")
 
 
 def write_rows(path, header, rows_):
