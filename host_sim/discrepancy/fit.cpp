@@ -270,7 +270,11 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
     const std::vector<FittedParameter> params = parameters_of(fit);
     const std::size_t P = params.size();
     fit.sd.assign(P, std::numeric_limits<double>::quiet_NaN());
-    if (!fit.ok) return;
+    fit.sd_unavailable.assign(P, "");
+    if (!fit.ok) {
+        fit.sd_unavailable.assign(P, "the fit did not complete: " + fit.failure);
+        return;
+    }
     // One more Jacobian at the fit, in plain 1/sigma weighting.
     const DifferenceRuns differences = forward_differences(
         fit.values, params, [&](const std::vector<double>& x) { return entries_of(fit, x); });
@@ -283,7 +287,11 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
     const Eigen::VectorXd r = r0.cwiseProduct(s);
     Eigen::MatrixXd J(r.size(), static_cast<Eigen::Index>(P));
     for (std::size_t j = 0; j < P; ++j) {
-        if (!columns[j].ok) return;
+        if (!columns[j].ok) {
+            fit.sd_unavailable.assign(P, "the model run for the Jacobian at the fit failed (" +
+                                             params[j].key + " stepped): " + columns[j].failure);
+            return;
+        }
         J.col(static_cast<Eigen::Index>(j)) =
             (normalised_residuals(data, columns[j], sigma, SampleSet::fit_training) - r0)
                 .cwiseProduct(s) /
@@ -298,9 +306,18 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
         r.squaredNorm() / std::max(1.0, n - static_cast<double>(P)) * (1.0 + rho) / (1.0 - rho);
     const Eigen::MatrixXd cov =
         (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse() * s2;
-    for (std::size_t j = 0; j < P; ++j)
+    for (std::size_t j = 0; j < P; ++j) {
+        // A parameter the training data do not respond to has no finite SD (the pseudo-inverse
+        // would report 0, as if it were known exactly).
+        if (!(J.col(static_cast<Eigen::Index>(j)).norm() > 0.0)) {
+            fit.sd_unavailable[j] = "the training data do not respond to " + params[j].key +
+                                    " at the fit (its " +
+                                    "Jacobian column is zero): not identified";
+            continue;
+        }
         fit.sd[j] = std::sqrt(
             std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
+    }
 }
 
 }  // namespace scopekin::discrepancy

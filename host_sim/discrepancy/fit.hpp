@@ -23,10 +23,12 @@
 namespace scopekin::discrepancy {
 
 struct EffectSetFit {
-    std::vector<std::size_t> candidates;               ///< indices into candidate_library()
-    std::vector<nlohmann::json> held;                  ///< per candidate
-    std::vector<double> values;                        ///< fitted parameters, candidates' in order
-    std::vector<double> sd;                            ///< their standard deviations
+    std::vector<std::size_t> candidates;  ///< indices into candidate_library()
+    std::vector<nlohmann::json> held;     ///< per candidate
+    std::vector<double> values;           ///< fitted parameters, candidates' in order
+    std::vector<double> sd;               ///< their standard deviations
+    /// Per parameter, why its SD could not be computed (empty where sd is finite).
+    std::vector<std::string> sd_unavailable;
     nlohmann::json effects = nlohmann::json::array();  ///< truth_effects entries at the fit
     ModelPrediction prediction;                        ///< the model at the fit
     double training_cost = 0;  ///< |normalised residual|^2 on the training blocks

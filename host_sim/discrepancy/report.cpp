@@ -94,6 +94,17 @@ Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
     for (std::size_t j = 0; j < k; ++j)
         at += candidate_library()[fit.candidates[j]].parameters.size();
     Json params = Json::array();
+    // A null SD says why (the fit's reason for that parameter, or for the pair it comes from).
+    auto why = [&](std::size_t i) {
+        return fit.sd_unavailable.size() > i && !fit.sd_unavailable[i].empty()
+                   ? fit.sd_unavailable[i]
+                   : std::string("not computed (no uncertainty pass for this fit)");
+    };
+    auto with_sd = [&](Json param, double sd, std::size_t i) {
+        param["sd"] = std::isfinite(sd) ? Json(sd) : Json(nullptr);
+        if (!std::isfinite(sd)) param["sd_unavailable"] = why(i);
+        return param;
+    };
     if (c.name == "sigmoid_mobility") {
         // Fitted as A cos(phi), A sin(phi); reported as A and phi (first-order error propagation).
         const double a = fit.values[at], b = fit.values[at + 1];
@@ -102,16 +113,19 @@ Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
         const double amp = std::hypot(a, b);
         const double sd_amp = amp > 0 ? std::hypot(a * sa, b * sb) / amp : NAN;
         const double sd_phase = amp > 0 ? std::hypot(b * sa, a * sb) / (amp * amp) : NAN;
-        params.push_back({{"name", "amplitude_N_per_mm"},
-                          {"value", amp},
-                          {"unit", "N/mm"},
-                          {"sd", sd_amp},
-                          {"fitted", true}});
-        params.push_back({{"name", "phase_rad"},
-                          {"value", std::atan2(b, a)},
-                          {"unit", "rad"},
-                          {"sd", sd_phase},
-                          {"fitted", true}});
+        const std::size_t ab = std::isfinite(sa) ? at + 1 : at;  // the reason of the pair
+        Json amplitude = with_sd(
+            {{"name", "amplitude_N_per_mm"}, {"value", amp}, {"unit", "N/mm"}, {"fitted", true}},
+            sd_amp, ab);
+        Json phase = with_sd(
+            {{"name", "phase_rad"}, {"value", std::atan2(b, a)}, {"unit", "rad"}, {"fitted", true}},
+            sd_phase, ab);
+        if (!(amp > 0)) {  // propagated through the amplitude: undefined at 0
+            amplitude["sd_unavailable"] = "the fitted amplitude is 0 (the effect is absent)";
+            phase["sd_unavailable"] = "the fitted amplitude is 0: the phase is undefined";
+        }
+        params.push_back(amplitude);
+        params.push_back(phase);
         params.push_back(
             {{"name", "frequency_Hz"},
              {"value", fit.held[k]["frequency_Hz"]},
@@ -126,25 +140,28 @@ Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
                             std::sin(polar) * std::sin(azimuth), std::cos(polar)}},
                           {"unit", "1"},
                           {"sd", nullptr},
+                          {"sd_unavailable",
+                           "a unit vector: the SDs are those of direction_polar_rad and "
+                           "direction_azimuth_rad"},
                           {"fitted", true},
                           {"how", "fitted as direction_polar_rad, direction_azimuth_rad"}});
         for (std::size_t j = 2; j < 4; ++j) {
             const double sd = fit.sd.size() > at + j ? fit.sd[at + j] : NAN;
-            params.push_back({{"name", c.parameters[j].key},
-                              {"value", fit.values[at + j]},
-                              {"unit", "rad"},
-                              {"sd", std::isfinite(sd) ? Json(sd) : Json(nullptr)},
-                              {"fitted", true}});
+            params.push_back(with_sd({{"name", c.parameters[j].key},
+                                      {"value", fit.values[at + j]},
+                                      {"unit", "rad"},
+                                      {"fitted", true}},
+                                     sd, at + j));
         }
         return params;
     }
     for (std::size_t j = 0; j < c.parameters.size(); ++j) {
         const double sd = fit.sd.size() > at + j ? fit.sd[at + j] : NAN;
-        params.push_back({{"name", c.parameters[j].key},
-                          {"value", fit.values[at + j]},
-                          {"unit", c.parameters[j].unit},
-                          {"sd", std::isfinite(sd) ? Json(sd) : Json(nullptr)},
-                          {"fitted", true}});
+        params.push_back(with_sd({{"name", c.parameters[j].key},
+                                  {"value", fit.values[at + j]},
+                                  {"unit", c.parameters[j].unit},
+                                  {"fitted", true}},
+                                 sd, at + j));
     }
     for (const auto& [key, value] : fit.held[k].items())
         params.push_back({{"name", key},

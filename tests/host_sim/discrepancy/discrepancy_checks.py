@@ -172,6 +172,9 @@ def check_hidden(name):
     if len(effects) == 1:
         best = r["candidates"][0]["effects"]
         expect(best == [effects[0]["name"]], f"top-ranked candidate {best}")
+    unexplained_sd = [(e["name"], q["name"]) for e in r["effects"] for q in e["parameters"]
+                      if q.get("fitted") and q.get("sd") is None and not q.get("sd_unavailable")]
+    expect(not unexplained_sd, f"every fitted parameter has an SD or says why not: {unexplained_sd}")
     for effect in effects:
         fitted = next((e for e in r["effects"] if e["name"] == effect["name"]), None)
         if fitted is None:
