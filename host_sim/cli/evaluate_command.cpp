@@ -600,8 +600,8 @@ void add_evaluate_commands(CLI::App& app) {
         "Tune the handle force monitor baseline's thresholds on evaluated DEVELOPMENT sets "
         "(DIR...: the --out of `scopekin evaluate` or `evaluate-merge`, their cases pooled; a set "
         "named 'validation' is refused): per alarm, a grid search for the most true episodes "
-        "detected within 0.5 s "
-        "with at most --max-false-per-10min false alarms per 10 minutes, pooled over the cases "
+        "detected within 0.5 s with at most --max-false-per-10min false alarms per 10 minutes, "
+        "pooled over the cases "
         "(host_sim/evaluate/README.md). Writes the thresholds file `scopekin evaluate` reads.");
     t->add_option("dirs", tune->dirs,
                   "Evaluated development sets, one or more (e.g. development and "

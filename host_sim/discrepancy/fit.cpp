@@ -311,8 +311,7 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
         // would report 0, as if it were known exactly).
         if (!(J.col(static_cast<Eigen::Index>(j)).norm() > 0.0)) {
             fit.sd_unavailable[j] = "the training data do not respond to " + params[j].key +
-                                    " at the fit (its " +
-                                    "Jacobian column is zero): not identified";
+                                    " at the fit (its Jacobian column is zero): not identified";
             continue;
         }
         fit.sd[j] = std::sqrt(

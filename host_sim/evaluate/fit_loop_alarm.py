@@ -124,7 +124,7 @@ def main():
     ap.add_argument("--report", help="JSON: held-out detections and false alarms per raise level")
     a = ap.parse_args()
     cases = features.read_cases(a.eval_dir, load)
-    patient = lambda c: c["name"].split("-")[0]
+    patient = features.patient_of
     patients = sorted({patient(c) for c in cases})
     if len(patients) < 2 or sum(len(c["episodes"]) for c in cases) == 0:
         print(f"fit_loop_alarm.py: {' '.join(a.eval_dir)}: {len(cases)} complete cases of {len(patients)} patients "

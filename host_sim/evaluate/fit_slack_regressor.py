@@ -216,7 +216,7 @@ def main():
               "with status complete), need at least 4", file=sys.stderr)
         sys.exit(2)
     target = lambda c: c[spec["y"]]
-    patient = lambda c: c["name"].split("-")[0]
+    patient = patient_of
     patients = sorted({patient(c) for c in cases})
     held_out, per_case = [], []
     folds = patient_folds(cases)

@@ -121,7 +121,7 @@ def main():
     ap.add_argument("--png", help="a picture: detections against false alarms per gate")
     a = ap.parse_args()
     cases = odometer.read_tracker_cases(a.eval_dir, load, "tune_loop_gate.py")
-    patient = lambda c: c["name"].split("-")[0]
+    patient = loop.features.patient_of
     folds = loop.features.patient_folds(cases)
     for k, p in enumerate(folds):
         print(f"tune: the loop alarm's trees without patients {' '.join(sorted(p))} ({k + 1} of {len(folds)})",

@@ -160,7 +160,7 @@ def read_tracker_cases(eval_dir, load, script):
     """The complete cases with the tracker's samples (`load` returns None for the others); with
     fewer than 2 patients the script exits 2 saying so."""
     cases = slack.read_cases(eval_dir, load)
-    if len({c["name"].split("-")[0] for c in cases}) < 2:
+    if len({slack.patient_of(c) for c in cases}) < 2:
         print(f"{script}: {' '.join([eval_dir] if isinstance(eval_dir, str) else eval_dir)}: {len(cases)} complete cases with EM tracker samples "
               "(cases/*/summary.json with status complete, recording.csv with em_tip_*), need at "
               "least 2 patients", file=sys.stderr)
