@@ -74,6 +74,16 @@ bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t si
     return false;
 }
 
+std::vector<double> nested_start(std::size_t c, std::size_t simpler,
+                                 const std::vector<double>& simpler_values) {
+    const std::vector<Candidate>& library = candidate_library();
+    if (c >= library.size() || simpler >= library.size()) return {};
+    if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale" &&
+        simpler_values.size() == 1)
+        return {simpler_values[0], simpler_values[0]};
+    return {};
+}
+
 const std::vector<Candidate>& candidate_library() {
     static const std::vector<Candidate> library = [] {
         std::vector<Candidate> c;
@@ -85,7 +95,7 @@ const std::vector<Candidate>& candidate_library() {
                        0.05,
                        0.0,
                        0.002,
-                       {0.0005, 0.002, 0.008, 0.032}}},
+                       {0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032}}},
                      constant({{"max_friction_increase", 0.25}}),
                      plain_entry("viscoadhesive_friction", {"viscous_coefficient_s_per_mm"})});
         c.push_back({"mesenteric_retraction",
@@ -96,7 +106,7 @@ const std::vector<Candidate>& candidate_library() {
                        0.1,
                        0.0,
                        0.002,
-                       {0.0005, 0.002, 0.008, 0.032}}},
+                       {0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032}}},
                      constant({{"exponent", 1.0}, {"reference_excess_mm", 10.0}}),
                      plain_entry("mesenteric_retraction", {"stiffness_N_per_mm2"})});
         c.push_back(
@@ -106,11 +116,12 @@ const std::vector<Candidate>& candidate_library() {
               {"handle_factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}}},
              constant({{"bending_section_length_mm", 0.0}, {"bending_section_factor", 1.0}}),
              plain_entry("ei_profile", {"tip_factor", "handle_factor"})});
-        c.push_back({"ei_scale",
-                     "the scope's bending stiffness, uniformly",
-                     {{"factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}}},
-                     constant(nlohmann::json::object()),
-                     plain_entry("ei_scale", {"factor"})});
+        c.push_back(
+            {"ei_scale",
+             "the scope's bending stiffness, uniformly",
+             {{"factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.6, 0.7, 0.8, 0.9, 1.12, 1.25, 1.4, 2.0}}},
+             constant(nlohmann::json::object()),
+             plain_entry("ei_scale", {"factor"})});
         c.push_back({"sigmoid_mobility",
                      "scope nodes in the sigmoid, periodically",
                      {{"amplitude_cos_phase_N_per_mm", "N/mm", -0.1, 0.1, 0.0, 0.002, {}},
@@ -132,12 +143,17 @@ const std::vector<Candidate>& candidate_library() {
                                            std::sin(v[2]) * std::sin(v[3]), std::cos(v[2])};
                          return e;
                      }});
-        c.push_back(
-            {"tissue_stiffening",
-             "the colon wall at every contact, stiffening with the force",
-             {{"stiffening_per_N", "1/N", 0.0, 20.0, 0.0, 0.3, {0.075, 0.3, 1.2, 4.8, 19.2}}},
-             constant(nlohmann::json::object()),
-             plain_entry("tissue_stiffening", {"stiffening_per_N"})});
+        c.push_back({"tissue_stiffening",
+                     "the colon wall at every contact, stiffening with the force",
+                     {{"stiffening_per_N",
+                       "1/N",
+                       0.0,
+                       20.0,
+                       0.0,
+                       0.3,
+                       {0.075, 0.15, 0.3, 0.6, 1.2, 2.4, 4.8, 9.6, 19.2}}},
+                     constant(nlohmann::json::object()),
+                     plain_entry("tissue_stiffening", {"stiffening_per_N"})});
         return c;
     }();
     return library;

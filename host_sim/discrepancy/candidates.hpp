@@ -52,6 +52,12 @@ const std::vector<Candidate>& candidate_library();
 /// with its tip and handle factors equal within their finite-difference step, 0.1, is ei_scale).
 bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler);
 
+/// The other way round: candidate `c`'s values that make it candidate `simpler` at `simpler_values`
+/// (ei_scale f is ei_profile (f, f)), or empty when `c` does not contain `simpler`. A start for `c`
+/// from which its fit can only explain more than `simpler` does.
+std::vector<double> nested_start(std::size_t c, std::size_t simpler,
+                                 const std::vector<double>& simpler_values);
+
 /// The strongest periodic component of the baseline's residuals (every assessed output, in units
 /// of its noise): frequency [Hz] in 0.05-2 Hz, and the principal direction of the position
 /// residuals at it (unit, colon frame; a first guess: the screening fits the direction).

@@ -157,13 +157,17 @@ std::vector<std::string> names_of(const EffectSetFit& fit) {
     return names;
 }
 
-std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params) {
+std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params,
+                                             bool coarse) {
     std::vector<std::vector<double>> axes;
     for (const FittedParameter& p : params) {
         if (p.screen.empty()) return {};
         std::vector<double> axis{p.neutral};
-        for (double v : p.screen)
+        const std::size_t every = coarse && p.screen.size() > kCoarseAbove ? 2 : 1;
+        for (std::size_t k = 0; k < p.screen.size(); k += every) {
+            const double v = p.screen[k];
             if (v >= p.lo && v <= p.hi && v != p.neutral) axis.push_back(v);
+        }
         axes.push_back(std::move(axis));
     }
     if (axes.empty()) return {};

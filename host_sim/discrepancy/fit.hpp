@@ -71,8 +71,13 @@ struct GridScreen {
     /// (the profile of the cost along the parameter's range).
     std::vector<std::vector<std::pair<double, double>>> profile;
 };
-/// The grid's points, the all-neutral one first; none when a parameter has no `screen`.
-std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params);
+/// The grid's points, the all-neutral one first; none when a parameter has no `screen`. `coarse`
+/// (a recording fitted on windows, where each run is a long one): every other value of an axis
+/// longer than kCoarseAbove, the first and the ×4 steps of a ×2 axis, to keep a 10-minute
+/// recording within its 2-minute budget.
+inline constexpr std::size_t kCoarseAbove = 5;
+std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params,
+                                             bool coarse = false);
 /// The best point and the profiles, from the costs of screen_grid(params)'s points in order.
 GridScreen summarise_grid(const std::vector<FittedParameter>& params,
                           std::vector<std::vector<double>> points, std::vector<double> costs);

@@ -11,8 +11,12 @@ namespace {
 
 /// Pairs refined after the linearised ranking.
 constexpr std::size_t kPairs = 2;
-/// How much more of the excess error a pair must explain than the best single effect.
+/// How much more of the excess error a pair must explain than the best single effect: kPairGain
+/// of it, or kPairShareOfRest of what the single leaves. The second for a dominant single that
+/// explains 97 % and still leaves an output at several times its noise: its partner can add no
+/// 5 % however well it fits the rest.
 constexpr double kPairGain = 0.05;
+constexpr double kPairShareOfRest = 0.5;
 /// Pairs are tried only when the best single effect explains at least this much: when no effect
 /// of the library explains anything alone, the disagreement is not theirs (and the pairs' runs
 /// are saved).
@@ -22,6 +26,10 @@ constexpr double kMinSingleShareForPairs = 0.1;
 /// this share of the single's remaining excess training cost: what is left may be the single's
 /// own misfit, which no partner removes.
 constexpr double kMinPartnerGain = 0.25;
+/// The same for a partner's measured screen on the refined single's residual: a lower bound of
+/// what the pair's joint fit removes (the single is not re-adjusted, the grid is coarse), so a
+/// lower bar. The pair fit, its BIC and kPairGain then decide.
+constexpr double kMinScreenedPartnerGain = 0.1;
 
 /// A pair of screened candidates ranked by the training cost the linearised model predicts for
 /// their joint Gauss-Newton step from the neutral point (no model run).
@@ -109,24 +117,45 @@ double training_noise_floor(const DiscrepancyContext& context) {
     return floor_training;
 }
 
-/// The best kPairs pairs by their linearised joint step (no run), fitted side by side: each fit's
-/// batches of runs leave threads idle that the other's fill.
+/// A pair to fit: its two candidates, their held parameters and the joint start.
+struct PairStart {
+    std::vector<std::size_t> set;
+    std::vector<nlohmann::json> held;
+    std::vector<double> start;
+};
+
+/// The pairs fitted side by side: each fit's batches of runs leave threads idle that the other's
+/// fill.
+std::vector<EffectSetFit> fit_pair_starts(const DiscrepancyContext& context,
+                                          const std::vector<PairStart>& starts, StageLog& stages) {
+    std::string names;
+    for (const PairStart& p : starts)
+        names += (names.empty() ? "" : ", ") + candidate_library()[p.set[0]].name + " + " +
+                 candidate_library()[p.set[1]].name;
+    stages.start("fitting " + names, (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
+    // On windows (a long recording) two iterations: the start is close already, and the budget is
+    // the point of the windows.
+    const int iterations = context.evaluator.windowed() ? 2 : 3;
+    std::vector<std::future<EffectSetFit>> pair_fits;
+    for (const PairStart& p : starts)
+        pair_fits.push_back(std::async(std::launch::async, [&context, p, iterations] {
+            return fit_effect_set(p.set, context, &p.start, &p.held, iterations);
+        }));
+    std::vector<EffectSetFit> pairs;
+    for (auto& f : pair_fits)
+        pairs.push_back(f.get());
+    return pairs;
+}
+
+/// The best kPairs pairs by their linearised joint step from the neutral point (no run).
 std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
                                     const std::vector<EffectSetFit>& screened, StageLog& stages) {
     const std::vector<PairEstimate> ranked = rank_pairs_linear(context, screened);
-    const std::size_t pair_count = std::min(kPairs, ranked.size());
-    std::string names;
-    for (std::size_t k = 0; k < pair_count; ++k)
-        names += (k > 0 ? ", " : "") +
-                 candidate_library()[screened[ranked[k].first].candidates[0]].name + " + " +
-                 candidate_library()[screened[ranked[k].second].candidates[0]].name;
-    stages.start("fitting " + names, (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
-    std::vector<std::future<EffectSetFit>> pair_fits;
-    for (std::size_t k = 0; k < pair_count; ++k) {
+    std::vector<PairStart> starts;
+    for (std::size_t k = 0; k < std::min(kPairs, ranked.size()); ++k) {
         const EffectSetFit& fa = screened[ranked[k].first];
         const EffectSetFit& fb = screened[ranked[k].second];
-        std::vector<double> start;
-        std::vector<nlohmann::json> held{fa.held[0], fb.held[0]};
+        PairStart p{{fa.candidates[0], fb.candidates[0]}, {fa.held[0], fb.held[0]}, {}};
         std::size_t at = 0;
         for (const EffectSetFit* f : {&fa, &fb}) {
             const std::vector<FittedParameter>& params =
@@ -135,22 +164,44 @@ std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
                 // Sigmoid mobility's angles come from its screening, not from the linear step.
                 const bool angle = params[j].key.rfind("direction_", 0) == 0;
                 const double value = angle ? f->values[j] : params[j].neutral + ranked[k].step[at];
-                start.push_back(std::clamp(value, params[j].lo, params[j].hi));
+                p.start.push_back(std::clamp(value, params[j].lo, params[j].hi));
             }
         }
-        const std::vector<std::size_t> set{fa.candidates[0], fb.candidates[0]};
-        // On windows (a long recording) two iterations: the start, the linearised joint step, is
-        // close already, and the budget is the point of the windows.
-        const int iterations = context.evaluator.windowed() ? 2 : 3;
-        pair_fits.push_back(
-            std::async(std::launch::async, [&context, set, start, held, iterations] {
-                return fit_effect_set(set, context, &start, &held, iterations);
-            }));
+        starts.push_back(std::move(p));
     }
-    std::vector<EffectSetFit> pairs;
-    for (auto& f : pair_fits)
-        pairs.push_back(f.get());
-    return pairs;
+    return fit_pair_starts(context, starts, stages);
+}
+
+/// The best kPairs partners of the refined single by their screen on its residual, each fitted
+/// with it from the single's values and the partner's best grid point.
+std::vector<EffectSetFit> fit_pairs_on_single(const DiscrepancyContext& context,
+                                              const EffectSetFit& single,
+                                              const std::vector<EffectSetFit>& screened,
+                                              const std::vector<PartnerScreen>& partners,
+                                              StageLog& stages) {
+    std::vector<PairStart> starts;
+    for (std::size_t k = 0; k < std::min(kPairs, partners.size()); ++k) {
+        const EffectSetFit& partner = screened[partners[k].screened];
+        PairStart p{{single.candidates[0], partner.candidates[0]},
+                    {single.held[0], partner.held[0]},
+                    single.values};
+        p.start.insert(p.start.end(), partners[k].values.begin(), partners[k].values.end());
+        starts.push_back(std::move(p));
+    }
+    return fit_pair_starts(context, starts, stages);
+}
+
+/// report.json's account of the partner screen.
+nlohmann::ordered_json partner_screen_json(const std::vector<EffectSetFit>& screened,
+                                           const std::vector<PartnerScreen>& partners,
+                                           double single_cost, double excess) {
+    nlohmann::ordered_json out = nlohmann::ordered_json::array();
+    for (const PartnerScreen& p : partners)
+        out.push_back({{"partner", candidate_library()[screened[p.screened].candidates[0]].name},
+                       {"values", p.values},
+                       {"training_cost", p.training_cost},
+                       {"gain", excess > 0.0 ? (single_cost - p.training_cost) / excess : 0.0}});
+    return out;
 }
 
 /// A pair whose member stayed at its neutral values is that member's partner alone (the neutral
@@ -212,10 +263,13 @@ std::optional<std::size_t> join_pairs(const DiscrepancyContext& context,
     const double min_share = context.options.min_share;
     const bool single_now_explains = share_of(context, candidates.front()) >= min_share;
     const EffectSetFit& single = candidates.front();
+    const double single_share = share_of(context, single);
+    const double pair_gain = pairs.empty() ? 0.0 : share_of(context, pairs.front()) - single_share;
     const bool pair_better =
         !pairs.empty() && share_of(context, pairs.front()) >= min_share &&
         pairs.front().bic < single.bic &&
-        share_of(context, pairs.front()) - share_of(context, single) >= kPairGain;
+        (pair_gain >= kPairGain ||
+         (pair_gain > 0.0 && pair_gain >= kPairShareOfRest * (1.0 - single_share)));
     // The list: the pairs (best first) ahead of the singles if the best pair is named, else after
     // them; the named set leads.
     if (pair_better) {
@@ -237,20 +291,45 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
     // The best single effect leads the ranked candidates.
     const EffectSetFit& best = candidates.front();
     const bool single_explains = share_of(context, best) >= context.options.min_share;
+    const bool leaves_something = !leaves_nothing_significant(context, best);
     double partner_gain = 0.0;
-    if (single_explains && !leaves_nothing_significant(context, best)) {
-        partner_gain = best_partner_gain(context, best, screened, training_noise_floor(context));
+    std::vector<PartnerScreen> partners;
+    if (single_explains && leaves_something) {
+        const double floor = training_noise_floor(context);
+        partner_gain = best_partner_gain(context, best, screened, floor);
         out.pair_test = {
             {"why", "the best single effect explains enough but leaves an output significant"},
             {"best_partner_gain", partner_gain},
-            {"threshold", kMinPartnerGain},
-            {"pairs_tried", partner_gain >= kMinPartnerGain}};
+            {"threshold", kMinPartnerGain}};
+        // The score test is linear at the model as given; measure as well, on the single's
+        // residual, what each partner's screen removes.
+        // Not on windows (long runs: the 10-minute recording's budget).
+        if (context.evaluator.windowed()) {
+            out.pair_test["partner_screen"] = "not run: fitted on windows";
+        } else {
+            stages.start("screening partners of " + candidate_library()[best.candidates[0]].name,
+                         (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
+            partners = screen_partners(context, best, screened);
+            const double cost =
+                context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
+            const double excess = cost - floor;
+            const double screened_gain = partners.empty() || !(excess > 0.0)
+                                             ? 0.0
+                                             : (cost - partners.front().training_cost) / excess;
+            out.pair_test["partner_screen"] = partner_screen_json(screened, partners, cost, excess);
+            out.pair_test["partner_screen_gain"] = screened_gain;
+            out.pair_test["partner_screen_threshold"] = kMinScreenedPartnerGain;
+            if (!(screened_gain >= kMinScreenedPartnerGain)) partners.clear();
+        }
+        out.pair_test["pairs_tried"] = partner_gain >= kMinPartnerGain || !partners.empty();
     }
     if (single_explains &&
-        (leaves_nothing_significant(context, best) || partner_gain < kMinPartnerGain)) {
+        (!leaves_something || (partner_gain < kMinPartnerGain && partners.empty()))) {
         out.chosen = 0;
     } else if (share_of(context, best) >= kMinSingleShareForPairs) {
-        std::vector<EffectSetFit> pairs = fit_pairs(context, screened, stages);
+        std::vector<EffectSetFit> pairs =
+            partners.empty() ? fit_pairs(context, screened, stages)
+                             : fit_pairs_on_single(context, best, screened, partners, stages);
         demote_neutral_members(context, pairs);
         out.chosen = join_pairs(context, std::move(pairs), candidates);
     }

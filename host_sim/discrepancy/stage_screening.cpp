@@ -197,13 +197,14 @@ struct GridRuns {
     std::vector<std::pair<std::size_t, std::size_t>> of;  // (candidate, point)
 };
 
-GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool>& carried) {
+GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool>& carried,
+                   bool coarse) {
     const std::vector<Candidate>& library = candidate_library();
     GridRuns g;
     g.points.resize(library.size());
     for (std::size_t c = 0; c < library.size(); ++c) {
         if (carried[c]) continue;
-        g.points[c] = screen_grid(library[c].parameters);
+        g.points[c] = screen_grid(library[c].parameters, coarse);
         for (std::size_t k = 1; k < g.points[c].size(); ++k) {
             g.lists.push_back(
                 nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
@@ -264,7 +265,7 @@ Screening screen_candidates(const DiscrepancyContext& context) {
     const std::vector<ModelPrediction> columns =
         context.evaluator.run_all(n.lists, RunScope::fit_training);
     const Trials steps = gauss_newton_steps(context, n, columns, r0, carried, fits);
-    const GridRuns grid = grid_runs(fits, carried);
+    const GridRuns grid = grid_runs(fits, carried, context.evaluator.windowed());
     // One batch: the steps over every window (they are scored as they are), the grid over the
     // training ones (it only picks a start).
     std::vector<std::pair<nlohmann::json, RunScope>> requests;

@@ -73,14 +73,28 @@ std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
                                             const std::vector<EffectSetFit>& screened,
                                             StageLog& stages);
 
+/// A partner of the best single effect screened on what the single leaves: the single held at
+/// its refined values, the partner over its screening grid (sigmoid_mobility at its screened
+/// values), training runs only. The lowest cost per partner, best first.
+struct PartnerScreen {
+    std::size_t screened = 0;    ///< index of the partner's fit in the screened list
+    std::vector<double> values;  ///< the partner's values at its lowest cost
+    double training_cost = 0;    ///< the pair's, single refined and partner there
+};
+std::vector<PartnerScreen> screen_partners(const DiscrepancyContext& context,
+                                           const EffectSetFit& single,
+                                           const std::vector<EffectSetFit>& screened);
+
 struct PairsOutcome {
     std::optional<std::size_t> chosen;  ///< index into the candidates of the set to name, if any
-    nlohmann::ordered_json pair_test;   ///< the score test (when it ran)
+    nlohmann::ordered_json pair_test;   ///< the score test and the partner screen (when they ran)
 };
-/// Pairs: names the best single effect when it explains enough and leaves nothing that a partner
-/// is predicted to remove; otherwise, if it explains at least a little, fits the two pairs best
-/// by their linearised joint step side by side, and names the best pair when it does better.
-/// Adds the pairs to `candidates` (ahead of the singles when a pair is chosen).
+/// Pairs: names the best single effect when it explains enough and leaves nothing significant.
+/// When it explains enough and leaves an output significant, screens the partners on its residual
+/// (screen_partners) and fits it with the two best of them when the best removes enough (else,
+/// when the score test predicts enough, the pairs below); when it explains too little but
+/// something, fits the two pairs best by their linearised joint step side by side. Names the best
+/// pair when it does better. Adds the pairs to `candidates` (ahead of the singles when chosen).
 PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened,
                        std::vector<EffectSetFit>& candidates, StageLog& stages);
 

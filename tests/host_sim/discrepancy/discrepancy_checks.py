@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """The discrepancy workflow proven on data with a hidden effect: each check must name the effect
 hidden in a synthetic recording, fit its parameters within 25 % and halve the most affected
-output's held-out error (host_sim/discrepancy/README.md). Each check writes a scenario, records it with `scopekin simulate` (the test bed's
-sensor noise, its own seed), and gives only the recording's CSV to `scopekin discrepancy` with the
-default model. Procedures, seeds and parameter values differ between checks.
+output's held-out error (host_sim/discrepancy/README.md). Each check writes a scenario, records it
+with `scopekin simulate` (the test bed's sensor noise, its own seed), and gives only the recording's
+CSV to `scopekin discrepancy` with the default model. Procedures, seeds and parameter values differ
+between checks; the procedures are host_sim/discrepancy/sweep/procedures.py's, which the
+robustness sweep also records.
 
 usage: discrepancy_checks.py CHECK SCOPEKIN WORK_DIR SOURCE_DIR
 A failure prints what differed and exits 1."""
@@ -15,54 +17,14 @@ import subprocess
 import sys
 
 CHECK, SCOPEKIN, WORK, SOURCE = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+# The procedures, the recording and the compared parameters, shared with the robustness sweep.
+sys.path.insert(0, os.path.join(SOURCE, "host_sim", "discrepancy", "sweep"))
+import procedures  # noqa: E402
+from procedures import COMPARED, truth_value  # noqa: E402
 # One check also draws the report's plots and has them checked (the others skip them for time).
 PLOTTED = "ei_scale"
 SECOND_PASS = "ei_scale"  # then run again on its own model.json (check_second_pass)
 failures = []
-
-# Procedures (insertion from 20 mm in the default colon; the sigmoid starts 158 mm along it).
-PROCEDURES = {
-    # 25 s to 390 mm: two speeds, a hold, a roll, a short withdrawal.
-    "A": [{"action": "advance", "start_s": 0, "end_s": 8, "speed_mm_per_s": 25},
-          {"action": "hold", "start_s": 8, "end_s": 9},
-          {"action": "advance", "start_s": 9, "end_s": 17, "speed_mm_per_s": 12},
-          {"action": "rotate", "start_s": 17, "end_s": 18, "speed_deg_per_s": 30},
-          {"action": "withdraw", "start_s": 18, "end_s": 21, "speed_mm_per_s": 15},
-          {"action": "advance", "start_s": 21, "end_s": 25, "speed_mm_per_s": 30}],
-    # 22 s to 320 mm: slow advance, withdrawal, roll the other way.
-    "B": [{"action": "advance", "start_s": 0, "end_s": 14, "speed_mm_per_s": 20},
-          {"action": "hold", "start_s": 14, "end_s": 15},
-          {"action": "withdraw", "start_s": 15, "end_s": 17, "speed_mm_per_s": 20},
-          {"action": "rotate", "start_s": 17, "end_s": 18, "speed_deg_per_s": -40},
-          {"action": "advance", "start_s": 18, "end_s": 22, "speed_mm_per_s": 15}],
-    # 26 s to 570 mm: deeper, into the sigmoid-descending junction where the loop starts.
-    "C": [{"action": "advance", "start_s": 0, "end_s": 14, "speed_mm_per_s": 30},
-          {"action": "hold", "start_s": 14, "end_s": 15},
-          {"action": "withdraw", "start_s": 15, "end_s": 18, "speed_mm_per_s": 25},
-          {"action": "advance", "start_s": 18, "end_s": 26, "speed_mm_per_s": 20}],
-}
-
-
-def cycles(speeds, period_s=20.0, advance_s=8.0):
-    """Bench cycles: advance, hold 1 s, roll 1 s (alternating), withdraw to the start at 1.5 x the
-    speed, hold for the rest of the period."""
-    steps, t = [], 0.0
-    for k, v in enumerate(speeds):
-        back = advance_s / 1.5
-        steps += [{"action": "advance", "start_s": t, "end_s": t + advance_s, "speed_mm_per_s": v},
-                  {"action": "hold", "start_s": t + advance_s, "end_s": t + advance_s + 1},
-                  {"action": "rotate", "start_s": t + advance_s + 1, "end_s": t + advance_s + 2,
-                   "speed_deg_per_s": 40 if k % 2 == 0 else -40},
-                  {"action": "withdraw", "start_s": t + advance_s + 2, "end_s": t + advance_s + 2 + back,
-                   "speed_mm_per_s": 1.5 * v},
-                  {"action": "hold", "start_s": t + advance_s + 2 + back, "end_s": t + period_s}]
-        t += period_s
-    return steps
-
-
-# 120 s of six cycles to 170-250 mm: longer than the fit budget (80 s), so the fits run on 8 s
-# windows restarted from the baseline's states (fit_windows.hpp).
-PROCEDURES["D"] = cycles([20, 28, 24, 18, 26, 22])
 
 # check -> (procedure, seed, hidden truth effects, sensors, expected verdict, fitted keys to compare)
 CHECKS = {
@@ -84,16 +46,6 @@ WINDOWED = {"windowed": ("D", 22, [{"name": "ei_scale", "factor": 1.15}], None)}
 FIT_BUDGET_S = "80"
 CHECKS.update(WINDOWED)
 
-# The fitted parameter compared with the truth, per effect (truth key, report key, factor).
-COMPARED = {
-    "viscoadhesive_friction": [("viscous_coefficient_s_per_mm", "viscous_coefficient_s_per_mm")],
-    "mesenteric_retraction": [("stiffness_N_per_mm2", "stiffness_N_per_mm2")],
-    "ei_profile": [("tip_factor", "tip_factor"), ("handle_factor", "handle_factor")],
-    "ei_scale": [("factor", "factor")],
-    "sigmoid_mobility": [("amplitude_N_per_mm", "amplitude_N_per_mm"), ("frequency_Hz", "frequency_Hz")],
-    "tissue_stiffening": [("stiffening_per_N", "stiffening_per_N")],
-}
-
 
 def expect(condition, message):
     if not condition:
@@ -111,28 +63,10 @@ def run(*args, expect_status=0):
     return p
 
 
-def truth_value(effect, key):
-    if effect["name"] == "tissue_stiffening" and key == "stiffening_per_N":
-        return 1.0 / effect["reference_force_N"]
-    return effect[key]
-
-
 def record(name, procedure, seed, effects, sensors):
     work = os.path.join(WORK, name)
     shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    scenario = {"description": f"discrepancy check {name}", "colon": {"bundled": "default"},
-                "scope": {"model": "cf_q160l", "length_mm": 1700, "elements": 170},
-                "gravity_mm_per_s2": [0, 0, -9810], "initial_insertion_mm": 20, "solver": {"time_step_s": 0.01},
-                "procedure": PROCEDURES[procedure]}
-    if effects:
-        scenario["truth_effects"] = effects
-    if sensors:
-        scenario["sensors"] = sensors
-    path = os.path.join(work, "scenario.json")
-    with open(path, "w") as f:
-        json.dump(scenario, f, indent=1)
-    run("simulate", path, "--out", os.path.join(work, "recorded"), "--seed", str(seed), "--quiet")
+    procedures.record(SCOPEKIN, work, f"discrepancy check {name}", procedure, seed, effects, sensors)
     return work
 
 
@@ -297,8 +231,47 @@ def check_thesis_cantilever(_name):
     expect("EI / w" in r["not_identifiable"], "the report says EI and weight are not separable")
 
 
+def check_sweep(_name):
+    """A small part of the robustness sweep (host_sim/discrepancy/sweep/robustness_sweep.py): two
+    cases run, judged and summarised into its tables and heat map; and its rule on made-up reports
+    (a parameter 24 % off passes, 26 % off fails; a null recording named fails)."""
+    sweep = os.path.join(SOURCE, "host_sim", "discrepancy", "sweep", "robustness_sweep.py")
+    out = os.path.join(WORK, "sweep")
+    shutil.rmtree(out, ignore_errors=True)
+    cases = ["ei_scale-1.3-B", "null-noise2x-B"]
+    p = subprocess.run(["/usr/bin/python3", sweep, "run", "--scopekin", SCOPEKIN, "--out", out,
+                        "--only", "^(" + "|".join(cases) + ")$"], capture_output=True, text=True)
+    print(p.stderr)
+    expect(p.returncode == 0, f"the sweep's two cases ran (exit {p.returncode})")
+    p = subprocess.run(["/usr/bin/python3", sweep, "summarise", out], capture_output=True, text=True)
+    print(p.stdout, p.stderr)
+    expect(p.returncode == 0, f"summarised (exit {p.returncode})")
+    for f in ["sweep.json", "sweep.csv", "sweep.md", "heatmap.png"]:
+        expect(os.path.isfile(os.path.join(out, f)), f"wrote {f}")
+    s = json.load(open(os.path.join(out, "sweep.json")))
+    expect(s["cases_judged"] == 2 and s["cases_planned"] >= 100, f"2 of {s['cases_planned']} planned cases judged")
+    expect(s["success_rate"] == 1.0, f"both judged right: {s['failures']}")
+    expect(s["false_named_on_null"] == 0, "no effect named on the null recording")
+    c = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py"),
+                        os.path.join(out, "heatmap.png")], capture_output=True, text=True)
+    expect(c.returncode == 0, f"the heat map is non-trivial: {c.stdout.strip()} {c.stderr.strip()}")
+    hidden = [{"name": "ei_scale", "factor": 0.8}]
+
+    def report(value, reduction=0.9, verdict="named"):
+        return {"verdict": verdict, "effects": [{"name": "ei_scale", "parameters": [{"name": "factor", "value": value}]}],
+                "most_affected_output": {"name": "handle_force_N", "reduction": reduction}}
+    expect(procedures.judge(report(0.8 * 1.24), hidden)["success"], "the rule: 24 % off passes")
+    late = procedures.judge(report(0.8 * 1.26), hidden)
+    expect(not late["success"] and "factor" in late["why"], f"the rule: 26 % off fails ({late['why']})")
+    weak = procedures.judge(report(0.8, reduction=0.4), hidden)
+    expect(not weak["success"] and "down 40 %" in weak["why"], f"the rule: the error down 40 % fails ({weak['why']})")
+    expect(not procedures.judge(report(0.8), [])["success"], "the rule: an effect named on a null recording fails")
+
+
 if CHECK == "bad_input":
     check_bad_input(CHECK)
+elif CHECK == "sweep":
+    check_sweep(CHECK)
 elif CHECK == "thesis_cantilever":
     check_thesis_cantilever(CHECK)
 elif CHECK in CHECKS:

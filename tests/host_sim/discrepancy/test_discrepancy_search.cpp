@@ -1,7 +1,7 @@
 // The discrepancy workflow's search for an effect (host_sim/discrepancy/): the screening's coarse
 // grid over each parameter's documented range (fit.hpp: screen_grid, summarise_grid), which finds
 // the basin of a cost that steps where a finite-difference step from the neutral value goes the
-// wrong way; and which nested effect reduces to which (candidates.hpp: reduces_to). The
+// wrong way; and which nested effect reduces to which (candidates.hpp: reduces_to, nested_start). The
 // objectives are made by hand with a known minimum; no model runs.
 #include <gtest/gtest.h>
 
@@ -112,6 +112,22 @@ TEST(DiscrepancyNestedEffects, EiProfileWithEqualFactorsIsEiScale) {
     EXPECT_FALSE(reduces_to(profile, {0.7, 1.2}, scale));
     EXPECT_FALSE(reduces_to(scale, {1.12}, profile));
     EXPECT_FALSE(reduces_to(profile, {1.0, 1.0}, profile));
+}
+
+// The other way round (nested_start): ei_scale f is ei_profile (f, f), the start from which a
+// refit of ei_profile can only explain more than ei_scale; no other pair of the library nests.
+TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
+    const auto index = [](const char* name) {
+        for (std::size_t c = 0; c < candidate_library().size(); ++c)
+            if (candidate_library()[c].name == name) return c;
+        return candidate_library().size();
+    };
+    const std::size_t profile = index("ei_profile"), scale = index("ei_scale");
+    EXPECT_EQ(nested_start(profile, scale, {0.823}), (std::vector<double>{0.823, 0.823}));
+    EXPECT_TRUE(nested_start(scale, profile, {0.8, 1.0}).empty());
+    EXPECT_TRUE(nested_start(profile, index("viscoadhesive_friction"), {0.001}).empty());
+    EXPECT_TRUE(nested_start(profile, scale, {}).empty());
+    EXPECT_TRUE(nested_start(profile, candidate_library().size(), {0.9}).empty());
 }
 
 }  // namespace
