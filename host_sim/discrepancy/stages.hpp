@@ -66,9 +66,11 @@ Significance assess_significance(const DiscrepancyContext& context);
 /// the grid's best point is the candidate's screened fit (the refinement's start).
 Screening screen_candidates(const DiscrepancyContext& context);
 
-/// Refinement: the best screened candidate refined by Levenberg-Marquardt; the next one while the
-/// refined ones explain too little, or when its screening step came close. Returns every fit,
-/// ranked (by_held_out, prefer_simpler).
+/// Refinement: the best screened candidate refined by Levenberg-Marquardt, a one-parameter one
+/// then searched between its grid neighbours; the runner-up too when the best explains too little,
+/// or (not on windows) when its screening explained a quarter of the excess; a nested candidate
+/// that fits worse than the one it contains refitted from it. Returns every fit, ranked
+/// (by_held_out, prefer_simpler).
 std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
                                             const std::vector<EffectSetFit>& screened,
                                             StageLog& stages);
