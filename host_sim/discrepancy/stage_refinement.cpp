@@ -38,10 +38,9 @@ std::pair<double, double> bracket_of(const FittedParameter& p, double x) {
 /// Keeps the fit when nothing beats it.
 void refine_on_axis(const DiscrepancyContext& context, EffectSetFit& fit) {
     if (context.evaluator.windowed()) return;  // long runs: the 10-minute recording's budget
+    if (!fit.ok || fit.candidates.size() != 1) return;
     const Candidate& c = candidate_library()[fit.candidates[0]];
-    if (!fit.ok || fit.candidates.size() != 1 || c.parameters.size() != 1 ||
-        c.parameters[0].screen.empty())
-        return;
+    if (c.parameters.size() != 1 || c.parameters[0].screen.empty()) return;
     const FittedParameter& p = c.parameters[0];
     double best = fit.values[0], best_cost = fit.training_cost;
     auto [a, b] = bracket_of(p, best);
