@@ -65,15 +65,6 @@ PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
     return best;
 }
 
-bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler) {
-    const std::vector<Candidate>& library = candidate_library();
-    if (c >= library.size() || simpler >= library.size()) return false;
-    if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale")
-        return values.size() == 2 &&
-               std::abs(values[0] - values[1]) <= library[c].parameters[0].step;
-    return false;
-}
-
 std::vector<double> nested_start(std::size_t c, std::size_t simpler,
                                  const std::vector<double>& simpler_values) {
     const std::vector<Candidate>& library = candidate_library();
@@ -81,6 +72,16 @@ std::vector<double> nested_start(std::size_t c, std::size_t simpler,
     if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale" &&
         simpler_values.size() == 1)
         return {simpler_values[0], simpler_values[0]};
+    return {};
+}
+
+std::vector<std::vector<double>> nested_projections(std::size_t c, std::size_t simpler,
+                                                    const std::vector<double>& values) {
+    const std::vector<Candidate>& library = candidate_library();
+    if (c >= library.size() || simpler >= library.size()) return {};
+    if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale" &&
+        values.size() == 2)
+        return {{values[0]}, {0.5 * (values[0] + values[1])}};
     return {};
 }
 

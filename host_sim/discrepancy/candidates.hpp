@@ -48,15 +48,17 @@ struct Candidate {
 /// The six effects of the host simulator's library, in EFFECTS.md order.
 const std::vector<Candidate>& candidate_library();
 
-/// Nested effects: whether candidate `c` at fitted `values` is candidate `simpler` (ei_profile
-/// with its tip and handle factors equal within their finite-difference step, 0.1, is ei_scale).
-bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler);
-
-/// The other way round: candidate `c`'s values that make it candidate `simpler` at `simpler_values`
+/// Nested effects: candidate `c`'s values that make it candidate `simpler` at `simpler_values`
 /// (ei_scale f is ei_profile (f, f)), or empty when `c` does not contain `simpler`. A start for `c`
 /// from which its fit can only explain more than `simpler` does.
 std::vector<double> nested_start(std::size_t c, std::size_t simpler,
                                  const std::vector<double>& simpler_values);
+
+/// The other way round: starts for candidate `simpler` near candidate `c` at `values` (ei_profile
+/// (tip, handle) gives ei_scale at the tip's factor and at the mean of the two), or none when `c`
+/// does not contain `simpler`.
+std::vector<std::vector<double>> nested_projections(std::size_t c, std::size_t simpler,
+                                                    const std::vector<double>& values);
 
 /// The strongest periodic component of the baseline's residuals (every assessed output, in units
 /// of its noise): frequency [Hz] in 0.05-2 Hz, and the principal direction of the position

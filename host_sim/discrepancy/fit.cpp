@@ -187,6 +187,22 @@ std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>&
     return points;
 }
 
+std::vector<double> profile_dips(const std::vector<std::pair<double, double>>& profile) {
+    std::vector<std::pair<double, double>> dips;  // (cost, value)
+    for (std::size_t k = 0; k < profile.size() && profile.size() > 1; ++k) {
+        const double cost = profile[k].second;
+        const bool below_left = k == 0 || cost < profile[k - 1].second;
+        const bool below_right = k + 1 == profile.size() || cost < profile[k + 1].second;
+        if (std::isfinite(cost) && below_left && below_right)
+            dips.emplace_back(cost, profile[k].first);
+    }
+    std::sort(dips.begin(), dips.end());
+    std::vector<double> values;
+    for (const auto& d : dips)
+        values.push_back(d.second);
+    return values;
+}
+
 GridScreen summarise_grid(const std::vector<FittedParameter>& params,
                           std::vector<std::vector<double>> points, std::vector<double> costs) {
     GridScreen g;

@@ -37,6 +37,9 @@ struct EffectSetFit {
     std::size_t iterations = 0;
     /// Screening only: the residual's Jacobian w.r.t. the parameters at the neutral point.
     Eigen::MatrixXd neutral_jacobian;
+    /// Screening only, one-parameter candidates: the grid's training cost along the parameter's
+    /// axis, (value, cost) by ascending value (the refinement's line search visits its dips).
+    std::vector<std::pair<double, double>> screen_profile;
     bool ok = false;
     std::string failure;
 };
@@ -71,6 +74,9 @@ struct GridScreen {
     /// (the profile of the cost along the parameter's range).
     std::vector<std::vector<std::pair<double, double>>> profile;
 };
+/// The dips of a cost profile ((value, cost) by ascending value, as GridScreen::profile): the
+/// values whose cost is below their neighbours' (an end below its one neighbour), lowest first.
+std::vector<double> profile_dips(const std::vector<std::pair<double, double>>& profile);
 /// The grid's points, the all-neutral one first; none when a parameter has no `screen`. `coarse`
 /// (a recording fitted on windows, where each run is a long one): every other value of an axis
 /// longer than kCoarseAbove, the first and the ×4 steps of a ×2 axis, to keep a 10-minute

@@ -20,26 +20,48 @@ bool by_held_out(const EffectSetFit& a, const EffectSetFit& b) {
     return a.held_out_cost < b.held_out_cost;
 }
 
+bool earns_its_parameters(double richer_held_out, double simpler_held_out, double noise_floor) {
+    const double rest = simpler_held_out - noise_floor;
+    return rest >= kMinRestCost && simpler_held_out - richer_held_out >= kShareOfRest * rest;
+}
+
+namespace {
+
+/// Whether single-effect fit `a` contains single-effect fit `b` (ei_profile contains ei_scale).
+bool contains(const EffectSetFit& a, const EffectSetFit& b) {
+    return a.candidates.size() == 1 && b.candidates.size() == 1 &&
+           !nested_start(a.candidates[0], b.candidates[0], b.values).empty();
+}
+
+bool earns(const DiscrepancyContext& context, const EffectSetFit& richer,
+           const EffectSetFit& simpler) {
+    return earns_its_parameters(richer.held_out_cost, simpler.held_out_cost, context.noise_floor);
+}
+
+}  // namespace
+
 void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits) {
     if (fits.empty() || !fits.front().ok) return;
+    const double tie = share_of(context, fits.front()) - kTieShare;
     std::size_t lead = 0;
     for (std::size_t k = 1; k < fits.size(); ++k)
-        if (fits[k].ok &&
-            share_of(context, fits[k]) >= share_of(context, fits.front()) - kTieShare &&
-            fits[k].bic < fits[lead].bic)
+        if (fits[k].ok && share_of(context, fits[k]) >= tie && fits[k].bic < fits[lead].bic)
             lead = k;
-    // A nested effect at the point where it is the simpler one yields to it.
-    for (bool yielded = true; yielded;) {
-        yielded = false;
-        if (fits[lead].candidates.size() != 1) break;
-        for (std::size_t k = 0; k < fits.size(); ++k)
-            if (k != lead && fits[k].ok && fits[k].candidates.size() == 1 &&
-                share_of(context, fits[k]) >= share_of(context, fits.front()) - kTieShare &&
-                reduces_to(fits[lead].candidates[0], fits[lead].values, fits[k].candidates[0])) {
+    // Of two nested effects within the tie, the held-out data decide, not the BIC: the richer
+    // leads only when it earns its parameters (earns_its_parameters).
+    for (bool moved = true; moved;) {
+        moved = false;
+        for (std::size_t k = 0; k < fits.size() && !moved; ++k) {
+            if (k == lead || !fits[k].ok || share_of(context, fits[k]) < tie) continue;
+            const bool to_simpler =
+                contains(fits[lead], fits[k]) && !earns(context, fits[lead], fits[k]);
+            const bool to_richer =
+                contains(fits[k], fits[lead]) && earns(context, fits[k], fits[lead]);
+            if (to_simpler || to_richer) {
                 lead = k;
-                yielded = true;
-                break;
+                moved = true;
             }
+        }
     }
     std::rotate(fits.begin(), fits.begin() + static_cast<std::ptrdiff_t>(lead),
                 fits.begin() + static_cast<std::ptrdiff_t>(lead) + 1);

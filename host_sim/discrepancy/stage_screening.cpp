@@ -311,6 +311,7 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         const GridScreen g = summarise_grid(library[c].parameters, grid.points[c], grid_costs[c]);
         const bool from_grid = !g.points.empty() && g.best != 0 && g.costs[g.best] < step_cost;
         f.iterations = 1;
+        if (g.profile.size() == 1) f.screen_profile = g.profile[0];
         if (from_grid) {
             f.values = g.points[g.best];
             f.effects = grid.lists[grid_run[c][g.best] - steps.lists.size()];

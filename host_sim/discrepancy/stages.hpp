@@ -5,7 +5,8 @@
 //   stage_significance.cpp  is any output's held-out error beyond its noise? If not: verdict none
 //   stage_screening.cpp     per candidate: a coarse grid over its range, and one Gauss-Newton
 //                           step from a shared Jacobian; the better is its start
-//   stage_refinement.cpp    Levenberg-Marquardt on the best (and on a runner-up that comes close)
+//   stage_refinement.cpp    Levenberg-Marquardt on the best (and on a runner-up that comes close),
+//                           then derivative-free searches (line, box) and nested restarts
 //   stage_pairs.cpp         pairs or not (the score test), then the two best pairs side by side
 //   stage_verdict.cpp       named or unexplained; the named effects' uncertainty (and, fitted on
 //                           windows, their run over the whole recording)
@@ -67,10 +68,12 @@ Significance assess_significance(const DiscrepancyContext& context);
 Screening screen_candidates(const DiscrepancyContext& context);
 
 /// Refinement: the best screened candidate refined by Levenberg-Marquardt, a one-parameter one
-/// then searched between its grid neighbours; the runner-up too when the best explains too little,
-/// or (not on windows) when its screening explained a quarter of the excess; a nested candidate
-/// that fits worse than the one it contains refitted from it. Returns every fit, ranked
-/// (by_held_out, prefer_simpler).
+/// then searched between its grid neighbours and around its screening profile's other dips; the
+/// runner-up too when the best explains too little, or (not on windows) when its screening
+/// explained a quarter of the excess; a nested candidate that fits worse than the one it contains
+/// refitted from it; a two-parameter one searched on a grid in the box of its parameters' second
+/// neighbours; a contained candidate that fits worse than the richer one refitted from the
+/// richer's values. Returns every fit, ranked (by_held_out, prefer_simpler).
 std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
                                             const std::vector<EffectSetFit>& screened,
                                             StageLog& stages);

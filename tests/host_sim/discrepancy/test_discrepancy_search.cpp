@@ -1,15 +1,18 @@
 // The discrepancy workflow's search for an effect (host_sim/discrepancy/): the screening's coarse
 // grid over each parameter's documented range (fit.hpp: screen_grid, summarise_grid), which finds
 // the basin of a cost that steps where a finite-difference step from the neutral value goes the
-// wrong way; and which nested effect reduces to which (candidates.hpp: reduces_to, nested_start). The
-// objectives are made by hand with a known minimum; no model runs.
+// wrong way; the profile's dips the line search visits (profile_dips); and nested effects
+// (candidates.hpp: nested_start; ranking.hpp: earns_its_parameters). The objectives are made by
+// hand with a known minimum; no model runs.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "host_sim/discrepancy/fit.hpp"
+#include "host_sim/discrepancy/ranking.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -97,21 +100,33 @@ TEST(DiscrepancyGridScreen, FailedRunsOutOfBoundsValuesAndNoGrid) {
     EXPECT_TRUE(screen_grid({p, free_amplitude}).empty());
 }
 
-// Nested effects: ei_profile with equal tip and handle factors is ei_scale (EFFECTS.md), so a fit
-// of it with factors equal within their difference step reduces to ei_scale; unequal ones, or the
-// other way round, do not.
-TEST(DiscrepancyNestedEffects, EiProfileWithEqualFactorsIsEiScale) {
-    std::size_t profile = 0, scale = 0;
-    for (std::size_t c = 0; c < candidate_library().size(); ++c) {
-        if (candidate_library()[c].name == "ei_profile") profile = c;
-        if (candidate_library()[c].name == "ei_scale") scale = c;
-    }
-    ASSERT_NE(profile, scale);
-    EXPECT_TRUE(reduces_to(profile, {1.122, 1.113}, scale));
-    EXPECT_TRUE(reduces_to(profile, {0.85, 0.85}, scale));
-    EXPECT_FALSE(reduces_to(profile, {0.7, 1.2}, scale));
-    EXPECT_FALSE(reduces_to(scale, {1.12}, profile));
-    EXPECT_FALSE(reduces_to(profile, {1.0, 1.0}, profile));
+// Of two nested fits the richer must earn its parameters on the held-out data: remove half of the
+// excess (cost above the noise floor) the simpler leaves, an excess of half a noise variance at
+// least. The numbers of the sweep's hidden ei_profile 0.8 to 1.0 on procedure B (ei_scale 8.40,
+// ei_profile 6.88, floor 6: 63 % of the rest) and of a hidden ei_scale 1.3 there (5.09 and 5.03:
+// below the floor, nothing to earn).
+TEST(DiscrepancyNestedEffects, TheRicherFitMustRemoveHalfOfWhatTheSimplerLeaves) {
+    EXPECT_TRUE(earns_its_parameters(6.88, 8.40, 6.0));
+    EXPECT_FALSE(earns_its_parameters(5.03, 5.09, 6.0));
+    EXPECT_TRUE(earns_its_parameters(7.0, 8.0, 6.0));    // exactly half of a rest of 2
+    EXPECT_FALSE(earns_its_parameters(7.01, 8.0, 6.0));  // just under half
+    EXPECT_FALSE(earns_its_parameters(6.0, 6.45, 6.0));  // all of a rest under 0.5
+    EXPECT_FALSE(earns_its_parameters(9.0, 8.0, 6.0));   // worse
+}
+
+// The dips of a screening profile, lowest first: the hidden EI factor 1.3 on procedure C, whose
+// training cost dips at 1.12 and again at 1.4 with a step between (650, 15,483, 965); ends count
+// when below their one neighbour; a flat or one-point profile has none; failed runs (infinite
+// cost) are no dip.
+TEST(DiscrepancyScreening, TheProfilesDipsAreItsLocalMinimaLowestFirst) {
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::vector<std::pair<double, double>> ei = {{0.7, 9000},   {1.0, 4000}, {1.12, 650},
+                                                       {1.25, 15483}, {1.4, 965},  {1.6, 3000}};
+    EXPECT_EQ(profile_dips(ei), (std::vector<double>{1.12, 1.4}));
+    EXPECT_EQ(profile_dips({{0.0, 5}, {1.0, 7}, {2.0, 6}}), (std::vector<double>{0.0, 2.0}));
+    EXPECT_TRUE(profile_dips({{0.0, 5}, {1.0, 5}}).empty());
+    EXPECT_TRUE(profile_dips({{1.0, 5}}).empty());
+    EXPECT_EQ(profile_dips({{0.0, inf}, {1.0, 3}, {2.0, inf}}), (std::vector<double>{1.0}));
 }
 
 // The other way round (nested_start): ei_scale f is ei_profile (f, f), the start from which a
@@ -128,6 +143,13 @@ TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
     EXPECT_TRUE(nested_start(profile, index("viscoadhesive_friction"), {0.001}).empty());
     EXPECT_TRUE(nested_start(profile, scale, {}).empty());
     EXPECT_TRUE(nested_start(profile, candidate_library().size(), {0.9}).empty());
+    // And from the richer to the simpler: ei_profile (tip, handle) gives ei_scale at the tip's
+    // factor and at the two factors' mean; nothing the other way or between unrelated effects.
+    EXPECT_EQ(nested_projections(profile, scale, {1.28, 1.30}),
+              (std::vector<std::vector<double>>{{1.28}, {1.29}}));
+    EXPECT_TRUE(nested_projections(scale, profile, {1.3}).empty());
+    EXPECT_TRUE(nested_projections(profile, index("tissue_stiffening"), {1.0, 1.0}).empty());
+    EXPECT_TRUE(nested_projections(profile, scale, {1.0}).empty());
 }
 
 }  // namespace
