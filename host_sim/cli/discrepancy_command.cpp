@@ -124,7 +124,10 @@ std::string report_markdown(const Json& r) {
     md +=
         "## Plots\n\n![measured and model, before and after](outputs.png)\n\n![residual before and "
         "after](residuals.png)\n\n"
-        "![the candidates' scores](candidates.png)\n";
+        "![the candidates' scores](candidates.png)\n" +
+        (r.contains("screening") && r["screening"].is_object()
+             ? std::string("\n![the screening profiles](profiles.png)\n")
+             : std::string());
     return md;
 }
 
@@ -157,8 +160,9 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
         const discrepancy::MeasuredRecording data =
             discrepancy::extract_measured_recording(rec, o.recording);
         const fs::path dir(o.out);
-        prepare_directory(dir, {"report.json", "report.md", "model.json", "series.csv",
-                                "outputs.png", "residuals.png", "candidates.png"});  // report first
+        prepare_directory(dir,
+                          {"report.json", "report.md", "model.json", "series.csv", "outputs.png",
+                           "residuals.png", "candidates.png", "profiles.png"});  // report first
         ProgressBar bar(o.quiet);
         options.progress = [&](const std::string& stage, double fraction) {
             bar.update(fraction, stage);
@@ -240,7 +244,11 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
             "%zu model runs, %.1f s; wrote report.json, report.md, model.json, series.csv%s into "
             "%s\n",
             r["model_runs"].get<std::size_t>(), r["wall_time_s"].get<double>(),
-            o.plots ? ", outputs.png, residuals.png, candidates.png" : "", dir.string().c_str());
+            !o.plots ? ""
+            : fs::exists(dir / "profiles.png")
+                ? ", outputs.png, residuals.png, candidates.png, profiles.png"
+                : ", outputs.png, residuals.png, candidates.png",
+            dir.string().c_str());
         return 0;
     } catch (const discrepancy::DiscrepancyInputError& e) {
         std::cerr << "scopekin discrepancy: refused: " << e.what() << "\n";

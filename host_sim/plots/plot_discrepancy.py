@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """Plot a discrepancy report: writes outputs.png (measured vs model before and after),
-residuals.png (residual before and after, held-out blocks shaded) and candidates.png (the
-candidates' held-out scores) into DIR, from DIR/series.csv and DIR/report.json (or --report FILE).
-Each PNG is written as NAME.part and renamed when complete."""
+residuals.png (residual before and after, held-out blocks shaded), candidates.png (the
+candidates' held-out scores) and profiles.png (each candidate's screening profile: the lowest
+training cost at each grid value of a parameter, the start and the fit; identifiability at a
+glance) into DIR, from DIR/series.csv and DIR/report.json (or --report FILE). Each PNG is written
+as NAME.part and renamed when complete."""
 import argparse
 import csv
 import json
@@ -105,6 +107,61 @@ def main():
     save(fig, "candidates.png")
     if not args.quiet:
         print(f"plot_discrepancy: wrote {os.path.join(args.directory, 'candidates.png')}", file=sys.stderr)
+    if plot_profiles(report, save, verdict, named) and not args.quiet:
+        print(f"plot_discrepancy: wrote {os.path.join(args.directory, 'profiles.png')}", file=sys.stderr)
+
+
+def profile_panels(report):
+    """(effect, parameter, values, costs, start, fitted) per screened parameter with a grid."""
+    fitted = {}
+    for c in report["candidates"]:
+        if len(c["effects"]) == 1 and c["ok"]:
+            for p in c["parameters"][0]:
+                if p.get("fitted"):
+                    fitted.setdefault((c["effects"][0], p["name"]), p["value"])
+    panels = []
+    for c in report["screening"]["candidates"] if report.get("screening") else []:
+        grid = c.get("grid")
+        if not grid:
+            continue
+        for j, prof in enumerate(grid["profile"]):
+            start = c["start_values"][j] if j < len(c.get("start_values", [])) else None
+            panels.append((c["effect"], prof["parameter"], prof["values"], prof["lowest_training_cost"],
+                           start, fitted.get((c["effect"], prof["parameter"]))))
+    return panels
+
+
+def plot_profiles(report, save, verdict, named):
+    """profiles.png: one panel per screened parameter, log training cost along its grid."""
+    panels = profile_panels(report)
+    if not panels:
+        return False
+    cols = 3
+    rows = (len(panels) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(11, 2.6 * rows + 0.8), squeeze=False)
+    base = report["screening"].get("baseline_training_cost")
+    for ax, (effect, parameter, values, costs, start, fit) in zip(axes.flat, panels):
+        finite = [(v, c) for v, c in zip(values, costs) if c is not None and c == c and c != float("inf")]
+        if finite:
+            ax.plot([v for v, _ in finite], [c for _, c in finite], "o-", ms=3, lw=1, color="tab:blue",
+                    label="grid (lowest over the others)")
+        if base:
+            ax.axhline(base, color="0.5", lw=0.8, ls="--", label="model as given")
+        if start is not None:
+            ax.axvline(start, color="tab:orange", lw=1, label="start")
+        if fit is not None:
+            ax.axvline(fit, color="tab:green", lw=1.2, label="fitted")
+        ax.set_yscale("log")
+        ax.set_title(f"{effect}\n{parameter}", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
+    axes[0, 0].legend(fontsize=6)
+    fig.supylabel("training cost (log)", fontsize=8)
+    fig.suptitle(f"screening profiles: verdict {verdict} ({named}); one clear dip: identified, flat: not")
+    fig.tight_layout()
+    save(fig, "profiles.png")
+    return True
 
 
 if __name__ == "__main__":

@@ -81,7 +81,7 @@ def check_hidden(name):
     for f in ["report.json", "report.md", "model.json", "series.csv"]:
         expect(os.path.isfile(os.path.join(out, f)), f"wrote {f}")
     if name == PLOTTED:
-        pngs = [os.path.join(out, n) for n in ["outputs.png", "residuals.png", "candidates.png"]]
+        pngs = [os.path.join(out, n) for n in ["outputs.png", "residuals.png", "candidates.png", "profiles.png"]]
         c = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py"), *pngs],
                            capture_output=True, text=True)
         expect(c.returncode == 0, f"the report's PNGs are non-trivial: {c.stdout.strip()} {c.stderr.strip()}")
