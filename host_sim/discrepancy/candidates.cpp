@@ -65,6 +65,15 @@ PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
     return best;
 }
 
+bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler) {
+    const std::vector<Candidate>& library = candidate_library();
+    if (c >= library.size() || simpler >= library.size()) return false;
+    if (library[c].name == "ei_profile" && library[simpler].name == "ei_scale")
+        return values.size() == 2 &&
+               std::abs(values[0] - values[1]) <= library[c].parameters[0].step;
+    return false;
+}
+
 std::vector<double> nested_start(std::size_t c, std::size_t simpler,
                                  const std::vector<double>& simpler_values) {
     const std::vector<Candidate>& library = candidate_library();

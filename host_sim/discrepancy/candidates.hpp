@@ -48,7 +48,11 @@ struct Candidate {
 /// The six effects of the host simulator's library, in EFFECTS.md order.
 const std::vector<Candidate>& candidate_library();
 
-/// Nested effects: candidate `c`'s values that make it candidate `simpler` at `simpler_values`
+/// Nested effects: whether candidate `c` at fitted `values` is close to candidate `simpler`
+/// (ei_profile with its tip and handle factors equal within their finite-difference step, 0.1).
+bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler);
+
+/// And candidate `c`'s values that make it candidate `simpler` at `simpler_values`
 /// (ei_scale f is ei_profile (f, f)), or empty when `c` does not contain `simpler`. A start for `c`
 /// from which its fit can only explain more than `simpler` does.
 std::vector<double> nested_start(std::size_t c, std::size_t simpler,

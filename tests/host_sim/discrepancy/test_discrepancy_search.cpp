@@ -150,6 +150,10 @@ TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
     EXPECT_TRUE(nested_projections(scale, profile, {1.3}).empty());
     EXPECT_TRUE(nested_projections(profile, index("tissue_stiffening"), {1.0, 1.0}).empty());
     EXPECT_TRUE(nested_projections(profile, scale, {1.0}).empty());
+    // Close to the simpler: factors within their difference step (0.1).
+    EXPECT_TRUE(reduces_to(profile, {0.814, 0.870}, scale));
+    EXPECT_FALSE(reduces_to(profile, {0.614, 0.944}, scale));
+    EXPECT_FALSE(reduces_to(scale, {1.12}, profile));
 }
 
 }  // namespace
