@@ -280,6 +280,34 @@ double World::friction_at(double arc_from_tip, ColonRegion region,
 namespace {
 /// Largest displacement of a scope node in one step that World::attempt accepts [mm].
 constexpr double kMaxNodeStep_mm = 10.0;
+
+// Penetration a contact began its step with is removed at most at this speed; what the step's own
+// free motion adds is removed in full. The contact problem asks for a closed gap at the step's
+// end, so a node found deep in the wall at the start (a contact released the step before, with
+// the massless colon springing back to rest under it) was thrown out at depth / h, 1-2 m/s, across
+// the lumen: the next step found it on the other side of the colon point it touched, its normal
+// flipped, the contact released, the colon sprang back — a period-2 cycle of the contact forces
+// in 30-43 % of the steps of some careful experts' runs and a median 33 % of the hurried
+// trainees' (model/truth/README.md). Limiting the depenetration speed is the usual cure in
+// time-stepping contact (e.g. the split impulse or "maximum depenetration velocity" of game
+// physics engines; Catto, "Iterative Dynamics with Temporal Coherence", GDC 2005, on Baumgarte
+// stabilisation). 100 mm/s is above the hands' 8-40 mm/s advance and a wall spring's recoil, so
+// a node pushed into the wall within a step still stops at it.
+constexpr double kMaxDepenetration_mm_per_s = 100.0;
+
+/// The penetration a contact may keep at the step's end [mm, >= 0]: what it began the step with
+/// beyond kMaxDepenetration_mm_per_s x h. The start gap is the free gap moved back to the step's
+/// start position (`back_to_start_mm`), against the colon where the last forces held it
+/// (`colon_held_mm`: g_held = g_rest - n . u) with the wall's spring compressed by the last normal
+/// force (`wall_spring_mm`): the gap the last contact solve closed.
+double penetration_allowed_mm(const ContactCandidate& c, const Eigen::Vector3d& back_to_start_mm,
+                              const Eigen::Vector3d& colon_held_mm, double wall_spring_mm,
+                              double h) {
+    const Eigen::Vector3d n = c.frame.col(0);
+    const double start_gap_mm =
+        c.gap_mm + n.dot(back_to_start_mm) - n.dot(colon_held_mm) + wall_spring_mm;
+    return std::max(0.0, -(start_gap_mm + kMaxDepenetration_mm_per_s * h));
+}
 /// How often a step may be halved before the material tangent is used instead (see World::step).
 constexpr int kMaxStepHalvings = 1;
 
@@ -628,6 +656,7 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
         }
         // The wall's local compliance per contact (truth effects may make it depend on the force).
         std::vector<double> wall_compliance(nc, settings_.contact.wall_compliance_mm_per_N);
+        std::vector<double> penetration_kept_mm(nc, 0.0);
         if (!effects_.empty())
             for (std::size_t a = 0; a < nc; ++a) {
                 const std::size_t node = candidates[a].scope_node;
@@ -686,10 +715,15 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
                                              start.positions[ca.scope_node] + colon_last +
                                              wall_deflection_mm_[ca.scope_node] - pleated;
             // delta = W f + delta_free with the carried forces' scope response taken out: the
-            // free motion above already holds it (W f_carried, scope part).
-            problem.free_displacement[a] = {ca.gap_mm - carried_response.x(),
-                                            ca.frame.col(1).dot(relative) - carried_response.y(),
-                                            ca.frame.col(2).dot(relative) - carried_response.z()};
+            // free motion above already holds it (W f_carried, scope part). A node that began the
+            // step in the wall is only asked out of it at kMaxDepenetration_mm_per_s.
+            penetration_kept_mm[a] = penetration_allowed_mm(
+                ca, start.positions[ca.scope_node] - scope_.position(ca.scope_node), colon_last,
+                wall_compliance[a] * std::max(0.0, carried[a].x()), h);
+            problem.free_displacement[a] = {
+                ca.gap_mm + penetration_kept_mm[a] - carried_response.x(),
+                ca.frame.col(1).dot(relative) - carried_response.y(),
+                ca.frame.col(2).dot(relative) - carried_response.z()};
             // Sliding speed for the effects: the node's velocity relative to the wall over the last
             // step (the colon's from its displacement now and one step earlier), across the normal.
             double sliding_speed = 0.0;
@@ -797,9 +831,11 @@ WorldStepReport World::attempt(const HandleCommand& command, bool geometric_tang
             r.friction_coefficient = mu[a];
             r.driving_angle_rad =
                 r.normal_force_N > 0.0 ? std::atan2(r.tangential_force_N, r.normal_force_N) : 0.0;
-            r.gap_mm = delta[0];
+            r.gap_mm = delta[0] - penetration_kept_mm[a];
             r.slip_mm = to_body_direction(delta[1] * c.frame.col(1) + delta[2] * c.frame.col(2));
             r.state = solved.states[a];
+            // The solve's own shortfall: a penetration kept on purpose (the depenetration limit) is
+            // not one.
             report.max_penetration_mm = std::max(report.max_penetration_mm, -delta[0]);
             report.friction_work_Nmm += forces[a][1] * delta[1] + forces[a][2] * delta[2];
             colon_forces[a] = {

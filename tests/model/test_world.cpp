@@ -2,6 +2,7 @@
 // test: a dense inverse computed by Eigen, Timoshenko closed forms, and hand-made geometry.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -205,6 +206,58 @@ TEST(World, HeldScopeRestsOnTheTubeAndTheWallCarriesItsWeight) {
     EXPECT_LE(vertical, inserted_weight * 1.001);
     for (const WorldContact& c : world.contacts())
         EXPECT_GT(c.normal.z(), 0.9);  // wall below pushes up
+}
+
+// A node found in the wall at a step's start (in a run: a contact released the step before and
+// the massless colon sprang back under it) leaves it at 100 mm/s, 1 mm per 10 ms step, instead of
+// being thrown out in one step: thrown at depth / h, it crossed the lumen, and the contact forces
+// alternated from step to step (model/world/world.cpp, kMaxDepenetration_mm_per_s).
+TEST(World, ANodeFoundInTheWallLeavesItAtTheDepenetrationSpeed) {
+    // 150 mm of scope settled on the floor of a straight rigid tube; then the tube's centerline is
+    // raised by 4 mm beyond 100 mm (a 50 mm ramp before): the nodes there begin 4 mm in its floor.
+    const ColonTube flat =
+        straight_tube(400.0, 15.0, ColonRegion::descending, cf_q160l::kRadius_mm);
+    WorldSettings settings;
+    settings.initial_insertion_mm = 150.0;
+    World settled(short_scope(), flat, default_colon_properties(), settings);
+    HandleCommand hold;
+    hold.insertion_mm = 150.0;
+    for (int i = 0; i < 150; ++i)
+        ASSERT_TRUE(settled.step(hold).ok);
+    constexpr double kRaise_mm = 4.0;
+    std::vector<ColonPoint> points = flat.points();
+    for (ColonPoint& p : points)
+        p.position_mm.z() += kRaise_mm * std::clamp((p.position_mm.x() - 50.0) / 50.0, 0.0, 1.0);
+    const ColonTube raised("raised_floor", std::move(points), cf_q160l::kRadius_mm);
+    World world(short_scope(), raised, default_colon_properties(), settings);
+    World::State state = settled.state();
+    // The state carries the colon's rest shape (it may have pleated): the raised one, then. The
+    // tube runs along the entry axis, so its frame is the computation frame.
+    ASSERT_EQ(state.telescoping.position_mm.size(), raised.point_count());
+    for (std::size_t i = 0; i < raised.point_count(); ++i) {
+        state.telescoping.position_mm[i] = raised.points()[i].position_mm;
+        state.pleated_tube_mm[i] = raised.points()[i].position_mm;
+    }
+    world.restore(state);
+    auto deepest_mm = [&] {
+        double gap = 0.0;
+        for (const WorldContact& c : world.contacts())
+            gap = std::min(gap, c.gap_mm);
+        return -gap;
+    };
+    const double out_per_step_mm = 100.0 * settings.time_step_s;  // 1 mm
+    for (int k = 1; k <= 3; ++k) {
+        ASSERT_TRUE(world.step(hold).ok);
+        // (to 0.15 mm: the scope unbends a little as it leaves the ramp)
+        EXPECT_NEAR(deepest_mm(), kRaise_mm - k * out_per_step_mm, 0.15) << "step " << k;
+    }
+    for (int k = 4; k <= 10; ++k)
+        ASSERT_TRUE(world.step(hold).ok);
+    EXPECT_LT(deepest_mm(), 0.05);
+    double fastest_mm_per_s = 0.0;
+    for (std::size_t n = 0; n < world.scope_node_count(); ++n)
+        fastest_mm_per_s = std::max(fastest_mm_per_s, world.node_velocity_mm_per_s(n).norm());
+    EXPECT_LT(fastest_mm_per_s, 110.0);  // out of the wall, and not thrown on across the lumen
 }
 
 TEST(World, FrictionOnlyDissipatesAndNothingPenetratesInTheBend) {
