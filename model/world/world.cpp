@@ -308,6 +308,7 @@ double penetration_allowed_mm(const ContactCandidate& c, const Eigen::Vector3d& 
         c.gap_mm + n.dot(back_to_start_mm) - n.dot(colon_held_mm) + wall_spring_mm;
     return std::max(0.0, -(start_gap_mm + kMaxDepenetration_mm_per_s * h));
 }
+
 /// How often a step may be halved before the material tangent is used instead (see World::step).
 constexpr int kMaxStepHalvings = 1;
 

@@ -153,7 +153,7 @@ struct WorldStepReport {
     double contact_residual_N =
         0;  ///< max of the solver's complementarity, cone, friction residuals
     double max_penetration_mm = 0;  ///< linearised, after the correction, beyond what was kept
-                                    ///< on purpose (kMaxDepenetration_mm_per_s)
+                                    ///< on purpose (kMaxDepenetration_mm_per_s, world.cpp)
     double friction_work_Nmm =
         0;  ///< sum f_T . slip over contacts: <= 0 (friction only dissipates)
     bool material_tangent_fallback =
