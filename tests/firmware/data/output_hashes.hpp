@@ -11,8 +11,8 @@
 namespace scopekin::test_data {
 
 inline constexpr OutputHash golden_output_hashes[] = {
-    {"synthetic_degraded_inputs", 1000U, 0x109641FE057AE8D4ULL},
-    {"synthetic_insertion_roll", 3200U, 0xB1C4462AA622877BULL},
+    {"synthetic_degraded_inputs", 1000U, 0x400B3D56D4BDB67FULL},
+    {"synthetic_insertion_roll", 3200U, 0x6A9DFF59B7DF8AC5ULL},
 };
 
 }  // namespace scopekin::test_data

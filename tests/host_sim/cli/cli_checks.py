@@ -747,9 +747,9 @@ def independent_rms(fw_rows, truth_rows, fw_col, truth_col):
     return (total / n) ** 0.5 if n else None
 
 
-def independent_detections(times, up, episodes, early=0.25, within=0.5):
-    """The detection rule of host_sim/evaluate/README.md, written again: episodes detected within
-    0.5 s, and rises outside every episode (false alarms)."""
+def independent_detections(times, up, episodes, early=1.0, within=0.5):
+    """The detection rule of host_sim/evaluate/README.md, written again: episodes detected by a rise
+    from 1 s before their onset to 0.5 s after it, and rises outside every episode (false alarms)."""
     rises = [t for k, t in enumerate(times) if up[k] and (k == 0 or not up[k - 1])]
     end_of_run = times[-1] + 0.005
     used, detected, false_alarms = set(), 0, 0
