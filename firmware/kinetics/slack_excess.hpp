@@ -19,7 +19,7 @@
 // The loop alarm from evidence (evidence_alarm.hpp) uses it as a gate: with the tracker, a
 // period's loop score counts only when at least gate_mm have been taken up, and then a lower
 // raise level applies (kinetics.hpp, Config::loop_alarm_with_tracker). Chosen on the development
-// set with the alarm's trees held out (host_sim/evaluate/tune_loop_gate.py): 4 mm and 0.65.
+// set with the alarm's trees held out (host_sim/evaluate/tune_loop_gate.py): 6 mm and 0.55.
 //
 // Bounded. The ring holds the poses of the last window_steps periods: at most one pose per
 // period, so window_steps + 1 <= kCapacity entries (Config::valid). On a pose that keeps pace
@@ -48,7 +48,7 @@ struct SlackExcess {
         std::uint16_t window_steps = 100;                 ///< the pace window: 0.5 s at 200 Hz
         Q16_16 min_hand_mm = Q16_16::from_int(1);         ///< the hand's least advance over it
         Q16_16 pace_fraction = Q16_16::from_ratio(1, 2);  ///< the tip's share that keeps pace
-        Q16_16 gate_mm = Q16_16::from_int(4);             ///< the loop alarm counts from here
+        Q16_16 gate_mm = Q16_16::from_int(6);             ///< the loop alarm counts from here
         /// window_steps in [1, kCapacity - 1]; min_hand_mm > 0; pace_fraction in (0, 1];
         /// gate_mm >= 0.
         [[nodiscard]] bool valid() const noexcept;

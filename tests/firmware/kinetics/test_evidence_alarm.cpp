@@ -4,7 +4,7 @@
 // count; through the kinetic estimator the published self-lock alarm is the evidence alarm while
 // the model is not trusted and the model's own stays in model_self_lock_alarm; settings or trees
 // that do not fit are refused; with the bench's EM tracker the score counts only once the tip has
-// fallen the gate (4 mm) behind the hand (slack_excess.hpp). Runs as GoogleTest on x86-64 / aarch64 and with portable_check's
+// fallen the gate (6 mm) behind the hand (slack_excess.hpp). Runs as GoogleTest on x86-64 / aarch64 and with portable_check's
 // runner on Cortex-M4.
 #include <cstdint>
 
@@ -118,7 +118,7 @@ SCOPEKIN_TEST(EvidenceAlarm, ThePublishedAlarmIsTheEvidenceWhileTheModelIsNotTru
 SCOPEKIN_TEST(EvidenceAlarm, WithTheTrackerTheScoreCountsOnlyOnceTheTipFallsBehind) {
     // A constant score of 0.8 and 11 N of push (the model not trusted). The hand advances 1 mm
     // per tracker pose (every 6 periods). While the tip keeps pace the gate is closed and the
-    // alarm stays down; once the tip stops, the gate opens at 4 mm taken up (the 4th pose after
+    // alarm stays down; once the tip stops, the gate opens at 6 mm taken up (the 6th pose after
     // the stop) and the alarm rises 3 periods later (settings(): 3 periods above 0.5).
     static const SlackTrees high = constant_score(kOne * 4 / 5);
     kin::Config config = kin::default_config();
@@ -148,9 +148,9 @@ SCOPEKIN_TEST(EvidenceAlarm, WithTheTrackerTheScoreCountsOnlyOnceTheTipFallsBehi
     SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
     SCOPEKIN_EXPECT_EQ(g_out.loop_score.raw(), kOne * 4 / 5);
     SCOPEKIN_EXPECT_TRUE(!g_out.self_lock_alarm);  // 0.8, but the tip keeps pace
-    run_poses(121, 123, false);                    // 3 mm taken up: the gate still closed
+    run_poses(121, 125, false);                    // 5 mm taken up: the gate still closed
     SCOPEKIN_EXPECT_TRUE(!g_out.self_lock_alarm);
-    run_poses(124, 124, false);  // 4 mm: open from this pose's first period, up on its third
+    run_poses(126, 126, false);  // 6 mm: open from this pose's first period, up on its third
     SCOPEKIN_EXPECT_TRUE(g_out.self_lock_alarm);
 }
 

@@ -1,7 +1,7 @@
 // SlackExcess (firmware/kinetics/slack_excess.hpp) on cases with closed-form answers, the truth's
 // pace rule (model/truth/README.md, "Loop episodes") on the tracker's odometry: a tip that stops
 // dead while the hand advances 1 mm per pose takes up exactly the hand's advance since the stop,
-// and the gate opens at 4 mm, not before; holding still keeps the excess, the tip slipping ahead
+// and the gate opens at 6 mm, not before; holding still keeps the excess, the tip slipping ahead
 // gives it back; a creep at the pace fraction is pace; without the tracker's odometry it is not
 // valid and starts afresh; settings that do not fit are refused, also through the estimator.
 // Runs as GoogleTest on x86-64 / aarch64 and with portable_check's runner on Cortex-M4.
@@ -48,11 +48,11 @@ SlackExcess::Outputs stop_after_pace(const SlackExcess::Config& config, SlackExc
 
 SCOPEKIN_TEST(SlackExcess, ATipThatStopsDeadTakesUpTheHandsAdvance) {
     const SlackExcess::Config config{};
-    for (const int stopped : {3, 4, 30}) {
+    for (const int stopped : {5, 6, 30}) {
         SlackExcess::State state{};
         const SlackExcess::Outputs out = stop_after_pace(config, state, stopped);
         SCOPEKIN_EXPECT_EQ(out.excess_mm.raw(), Q16_16::from_int(stopped).raw());
-        SCOPEKIN_EXPECT_TRUE(out.gate_open == (stopped >= 4));  // the gate opens at 4 mm
+        SCOPEKIN_EXPECT_TRUE(out.gate_open == (stopped >= 6));  // the gate opens at 6 mm
     }
 }
 
