@@ -31,7 +31,7 @@ import sys
 
 import numpy as np
 
-from case_columns import BadInput, columns, complete_summary
+from case_columns import BadInput, case_folders, columns, complete_summary
 
 EARLY_S, WITHIN_S = 1.0, 0.5  # the scorecard's detection window around the onset
 SPEED_WINDOW_S = 2.0
@@ -204,16 +204,13 @@ def main():
     args = parser.parse_args()
     estimators = [e for e in args.estimators.split(",") if e]
     try:
-        cases_dir = os.path.join(args.eval_dir, "cases")
-        if not os.path.isdir(cases_dir):
-            raise BadInput(f"{args.eval_dir}: no cases/ folder (an evaluation's output?)")
+        cases = case_folders(args.eval_dir)
         all_rows, false_by_bin, time_in_bin = [], {e: {} for e in estimators}, {}
-        names = sorted(os.listdir(cases_dir))
         scored = 0
-        for k, name in enumerate(names):
-            result = study_case(os.path.join(cases_dir, name), estimators)
+        for k, (name, folder) in enumerate(cases):
+            result = study_case(folder, estimators)
             if result is None:
-                print(f"[{k + 1}/{len(names)}] {name}: not a complete scored case, skipped", flush=True)
+                print(f"[{k + 1}/{len(cases)}] {name}: not a complete scored case, skipped", flush=True)
                 continue
             rows, false, seconds = result
             scored += 1
@@ -223,7 +220,7 @@ def main():
                     false_by_bin[e][b] = false_by_bin[e].get(b, 0) + n
             for b, s in seconds.items():
                 time_in_bin[b] = time_in_bin.get(b, 0.0) + s
-            print(f"[{k + 1}/{len(names)}] {name}: {len(rows) // len(estimators)} loop episodes", flush=True)
+            print(f"[{k + 1}/{len(cases)}] {name}: {len(rows) // len(estimators)} loop episodes", flush=True)
         if scored == 0:
             raise BadInput(f"{args.eval_dir}: no complete scored case (run `scopekin evaluate` first)")
     except BadInput as e:

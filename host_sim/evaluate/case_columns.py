@@ -1,5 +1,5 @@
-"""What the studies of host_sim/evaluate share: a complete case's summary, its CSVs read as named
-columns, and the bad input they refuse (exit status 2)."""
+"""What the studies of host_sim/evaluate share: an evaluation's case folders, a complete case's
+summary, its CSVs read as named columns, and the bad input they refuse (exit status 2)."""
 import csv
 import json
 import os
@@ -9,6 +9,14 @@ import numpy as np
 
 class BadInput(Exception):
     """Input a study refuses: its message names the file and what is wrong."""
+
+
+def case_folders(eval_dir):
+    """(name, folder) of each case of an evaluation (EVAL_DIR/cases/NAME), sorted by name."""
+    cases_dir = os.path.join(eval_dir, "cases")
+    if not os.path.isdir(cases_dir):
+        raise BadInput(f"{eval_dir}: no cases/ folder (an evaluation's output?)")
+    return [(name, os.path.join(cases_dir, name)) for name in sorted(os.listdir(cases_dir))]
 
 
 def columns(path, names):

@@ -26,7 +26,7 @@ import sys
 
 import numpy as np
 
-from case_columns import BadInput, columns, complete_summary
+from case_columns import BadInput, case_folders, columns, complete_summary
 
 
 def case_style(name):
@@ -101,22 +101,18 @@ def main():
     try:
         if not args.threshold_n > 0:
             raise BadInput(f"--threshold-n {args.threshold_n}: must be > 0")
-        cases_dir = os.path.join(args.eval_dir, "cases")
-        if not os.path.isdir(cases_dir):
-            raise BadInput(f"{args.eval_dir}: no cases/ folder (an evaluation's output?)")
-        names = sorted(os.listdir(cases_dir))
+        cases = case_folders(args.eval_dir)
         rows = []
-        for k, name in enumerate(names):
-            folder = os.path.join(cases_dir, name)
+        for k, (name, folder) in enumerate(cases):
             summary = complete_summary(folder)
             if summary is None:
-                print(f"[{k + 1}/{len(names)}] {name}: not a complete case, skipped", flush=True)
+                print(f"[{k + 1}/{len(cases)}] {name}: not a complete case, skipped", flush=True)
                 continue
             steps, chattering = chatter_share(folder, summary, args.threshold_n)
             share = chattering / steps if steps else 0.0
             rows.append({"case": name, "style": case_style(name), "steps": steps,
                          "chattering": chattering, "share": share})
-            print(f"[{k + 1}/{len(names)}] {name}: {100 * share:.1f} % of {steps} steps", flush=True)
+            print(f"[{k + 1}/{len(cases)}] {name}: {100 * share:.1f} % of {steps} steps", flush=True)
         if not rows:
             raise BadInput(f"{args.eval_dir}: no complete case (run `scopekin evaluate` first)")
     except BadInput as e:

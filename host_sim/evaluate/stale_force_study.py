@@ -36,7 +36,7 @@ import sys
 
 import numpy as np
 
-from case_columns import BadInput, columns, complete_summary
+from case_columns import BadInput, case_folders, columns, complete_summary
 
 PERIOD_S = 0.005  # the box's period
 SILENCED = ("handle_force_N", "handle_torque_Nmm")
@@ -197,19 +197,16 @@ def main():
     try:
         if not 0.0 <= args.at < 1.0 or not args.silence_s > 0 or not args.after_s >= 0:
             raise BadInput("--at must be in [0, 1), --silence-s > 0, --after-s >= 0")
-        cases_dir = os.path.join(args.eval_dir, "cases")
-        if not os.path.isdir(cases_dir):
-            raise BadInput(f"{args.eval_dir}: no cases/ folder (an evaluation's output?)")
         results = []
-        names = sorted(os.listdir(cases_dir))
-        for k, name in enumerate(names):
-            result = study_case(os.path.join(cases_dir, name), os.path.join(args.out, "cases", name), args)
+        cases = case_folders(args.eval_dir)
+        for k, (name, folder) in enumerate(cases):
+            result = study_case(folder, os.path.join(args.out, "cases", name), args)
             if result is None:
-                print(f"[{k + 1}/{len(names)}] {name}: not a complete case, skipped", flush=True)
+                print(f"[{k + 1}/{len(cases)}] {name}: not a complete case, skipped", flush=True)
                 continue
             results.append(result)
             m = result[2]["silent"]
-            print(f"[{k + 1}/{len(names)}] {name}: tip {m['tip_rms_mm']:.1f} mm, force "
+            print(f"[{k + 1}/{len(cases)}] {name}: tip {m['tip_rms_mm']:.1f} mm, force "
                   f"{m['force_rms_N']:.2f} N RMS while silent", flush=True)
         if not results:
             raise BadInput(f"{args.eval_dir}: no complete case")
