@@ -19,7 +19,7 @@
 // The loop alarm from evidence (evidence_alarm.hpp) uses it as a gate: with the tracker, a
 // period's loop score counts only when at least gate_mm have been taken up, and then a lower
 // raise level applies (kinetics.hpp, Config::loop_alarm_with_tracker). Chosen on the development
-// set with the alarm's trees held out (host_sim/evaluate/tune_loop_gate.py): 6 mm and 0.55.
+// set with the alarm's trees held out (host_sim/evaluate/tune_loop_gate.py): 6 mm and 0.625.
 //
 // Bounded. The ring holds the poses of the last window_steps periods: at most one pose per
 // period, so window_steps + 1 <= kCapacity entries (Config::valid). On a pose that keeps pace

@@ -15,10 +15,17 @@ below raise - HYSTERESIS for CLEAR_STEPS periods (the firmware's debounce, evalu
 same Q16.16 grid).
 
 The raise level is chosen on the development set only, with each patient left out of the fit in
-turn (12 groups of patients beyond 12 patients: fit_slack_regressor.patient_folds): the level that detects the most episodes within 0.5 s with at most BUDGET_PER_10MIN false
-alarms per 10 minutes (issue 21's bound), ties to fewer false alarms. The report gives every
-level's held-out detections and false alarms beside the reduced model's self-lock alarm on the
-same cases. Needs Debian's python3-sklearn and python3-numpy.
+turn (12 groups of patients beyond 12 patients: fit_slack_regressor.patient_folds): the level that
+detects the most episodes within 0.5 s while its false alarms stay within BUDGET_PER_10MIN per 10
+minutes (issue 21's bound) with a margin, ties to fewer false alarms. The margin: the bound is
+judged on other patients, so the rate that must meet it is not the development set's pooled rate
+but its BUDGET_QUANTILE (90th percentile) over RESAMPLES sets of RESAMPLE_PATIENTS patients drawn
+with replacement from the development patients (a patient bootstrap, Efron & Tibshirani 1993, *An
+Introduction to the Bootstrap*, ch. 6; 20 patients: the size of the validation set, which is
+never looked at). Choosing at the pooled rate put the level at the budget's edge, and the next 20
+patients landed on its other side. The report gives every level's held-out detections, pooled
+false alarms and their resampled 90th percentile beside the reduced model's self-lock alarm on
+the same cases. Needs Debian's python3-sklearn and python3-numpy.
 """
 import argparse
 import json
@@ -34,8 +41,12 @@ RATE = 0.1
 EARLY_S, WITHIN_S = 1.0, 0.5
 RAISE_STEPS, CLEAR_STEPS = 10, 100   # 50 ms above to rise, 0.5 s below to clear
 HYSTERESIS = 0.1
-LEVELS = [round(v, 2) for v in np.arange(0.30, 0.951, 0.05)]
+LEVELS = [round(v, 3) for v in np.arange(0.30, 0.951, 0.025)]
 BUDGET_PER_10MIN = 2.0
+BUDGET_QUANTILE = 0.9       # the share of resampled patient sets that must meet the budget
+RESAMPLE_PATIENTS = 20      # patients per resampled set
+RESAMPLES = 2000
+RESAMPLE_SEED = 1           # a fixed seed: the same evaluation always chooses the same level
 PERIOD_S = 0.005
 
 
@@ -105,15 +116,41 @@ def fit(cases):
     return features.model(RATE).fit(X[keep], y[keep])
 
 
+def resampled_false_alarm_rate(per_patient):
+    """The BUDGET_QUANTILE of the false alarms per 10 min over patient sets drawn with replacement
+    (per_patient: rows of [false alarms, seconds], one per patient)."""
+    tally = np.asarray(per_patient, dtype=float)
+    draw = np.random.default_rng(RESAMPLE_SEED).integers(0, len(tally), size=(RESAMPLES, RESAMPLE_PATIENTS))
+    seconds = tally[:, 1][draw].sum(axis=1)
+    rate = tally[:, 0][draw].sum(axis=1) * 600.0 / np.maximum(seconds, 1e-9)
+    return float(np.quantile(rate, BUDGET_QUANTILE))
+
+
 def pooled(cases, alarm_of):
+    """The scorecard's counts over the cases, and the false-alarm rate's resampled quantile."""
     detected = false_alarms = episodes = 0
     seconds = 0.0
+    per_patient = {}
     for c in cases:
         d, f, s = score_alarm(c["time_s"], alarm_of(c), c["episodes"])
         detected, false_alarms, seconds = detected + d, false_alarms + f, seconds + s
         episodes += len(c["episodes"])
+        tally = per_patient.setdefault(features.patient_of(c), [0, 0.0])
+        tally[0], tally[1] = tally[0] + f, tally[1] + s
     return {"episodes": episodes, "detected": detected, "false_alarms": false_alarms,
-            "false_alarms_per_10min": false_alarms * 600.0 / seconds if seconds else None}
+            "false_alarms_per_10min": false_alarms * 600.0 / seconds if seconds else None,
+            "false_alarms_per_10min_resampled": resampled_false_alarm_rate(list(per_patient.values()))}
+
+
+def within_budget(row):
+    """The choice rule: the resampled quantile of the false-alarm rate within the budget."""
+    return row["false_alarms_per_10min_resampled"] <= BUDGET_PER_10MIN
+
+
+def best_within_budget(rows):
+    """The most detections within the budget, ties to fewer false alarms; None if none is."""
+    ok = [r for r in rows if within_budget(r)]
+    return max(ok, key=lambda r: (r["detected"], -r["false_alarms"])) if ok else None
 
 
 def main():
@@ -141,11 +178,12 @@ def main():
         row = pooled(cases, lambda c: debounced(c["held_out_score"], level))
         row["raise_level"] = level
         levels.append(row)
-        print(f"fit: raise level {level:.2f}: {row['detected']} of {row['episodes']} within 0.5 s, "
-              f"{row['false_alarms_per_10min']:.2f} false alarms per 10 min", file=sys.stderr)
-    within = [r for r in levels if r["false_alarms_per_10min"] <= BUDGET_PER_10MIN]
-    chosen = (max(within, key=lambda r: (r["detected"], -r["false_alarms"])) if within
-              else min(levels, key=lambda r: (r["false_alarms"], -r["detected"])))
+        print(f"fit: raise level {level:.3f}: {row['detected']} of {row['episodes']} within 0.5 s, "
+              f"{row['false_alarms_per_10min']:.2f} false alarms per 10 min "
+              f"(p{100 * BUDGET_QUANTILE:.0f} over sets of {RESAMPLE_PATIENTS} patients "
+              f"{row['false_alarms_per_10min_resampled']:.2f})", file=sys.stderr)
+    chosen = (best_within_budget(levels)
+              or min(levels, key=lambda r: (r["false_alarms"], -r["detected"])))
     model_alarm = pooled(cases, lambda c: c["model_alarm"])
 
     print("fit: the final fit on every case", file=sys.stderr)
@@ -157,7 +195,10 @@ def main():
     summary = {"cases": len(cases), "patients": len(patients), "features": features.FEATURES,
                "trees": features.TREES, "depth": features.DEPTH, "learning_rate": RATE,
                "raise_steps": RAISE_STEPS, "clear_steps": CLEAR_STEPS, "hysteresis": HYSTERESIS,
-               "budget_false_alarms_per_10min": BUDGET_PER_10MIN, "chosen": chosen,
+               "budget_false_alarms_per_10min": BUDGET_PER_10MIN,
+               "budget_rule": {"quantile": BUDGET_QUANTILE, "resampled_patients": RESAMPLE_PATIENTS,
+                               "resamples": RESAMPLES, "seed": RESAMPLE_SEED},
+               "chosen": chosen,
                "held_out_by_level": levels, "reduced_model_self_lock": model_alarm,
                "firmware_vs_sklearn_max_abs": mismatch}
     print(json.dumps({k: v for k, v in summary.items() if k != "held_out_by_level"}, indent=1),
@@ -167,7 +208,9 @@ def main():
             json.dump(summary, f, indent=1)
     source = (f"fitted by host_sim/evaluate/fit_loop_alarm.py on {len(cases)} development cases "
               f"({len(patients)} patients); held out: {chosen['detected']} of {chosen['episodes']} loop "
-              f"episodes within 0.5 s at {chosen['false_alarms_per_10min']:.2f} false alarms per 10 min")
+              f"episodes within 0.5 s at {chosen['false_alarms_per_10min']:.2f} false alarms per 10 min "
+              f"(p{100 * BUDGET_QUANTILE:.0f} over sets of {RESAMPLE_PATIENTS} patients "
+              f"{chosen['false_alarms_per_10min_resampled']:.2f})")
     raise_raw = int(q16_raw(chosen["raise_level"]))
     clear_raw = int(q16_raw(chosen["raise_level"] - HYSTERESIS))
     extra = f"""

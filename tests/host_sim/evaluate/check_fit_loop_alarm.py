@@ -4,7 +4,10 @@ four patients whose loops start 0.3 s into each hard push (the push force steps 
 for 3 s at random times), where the reduced model's alarm never rises. Leaving each patient out,
 the chosen raise level must find at least 90 % of the onsets within 0.5 s at no more than 2 false
 alarms per 10 minutes; the source must hold 100 complete trees of depth 4 and the alarm's
-settings; bad input must exit 2 and write nothing.
+settings; bad input must exit 2 and write nothing. The margin rule's resampled rate is checked
+against closed forms: patients all at one rate give that rate, and one patient in ten with 20 false
+alarms per 10 min (the rest none) gives the binomial quantile: the 90th percentile of
+Binomial(20, 0.1) heavy patients in 20 is 4, so 4 per 10 min where the pooled rate is 2.
 
 usage: check_fit_loop_alarm.py CHECK SOURCE_DIR WORK_DIR   (CHECK: synthetic | bad_input)"""
 import json
@@ -72,6 +75,14 @@ if CHECK == "synthetic":
     raise_raw = int(np.floor(chosen["raise_level"] * 65536))
     expect(f"EvidenceAlarm::Config{{{raise_raw}," in text and "10U, 100U}" in text,
            "the source defines default_loop_alarm() with the chosen level and the debounce")
+    expect(chosen["false_alarms_per_10min_resampled"] <= 2.0,
+           f"the chosen level meets the budget at the resampled 90th percentile: {chosen}")
+    sys.path.insert(0, os.path.dirname(FIT))
+    import fit_loop_alarm
+    same = fit_loop_alarm.resampled_false_alarm_rate([[3, 900.0]] * 7)
+    expect(abs(same - 2.0) < 1e-9, f"patients all at 2 per 10 min: the quantile is 2 ({same})")
+    one_heavy = fit_loop_alarm.resampled_false_alarm_rate([[0, 600.0]] * 9 + [[20, 600.0]])
+    expect(abs(one_heavy - 4.0) < 1e-9, f"one patient in ten at 20 per 10 min: p90 4 ({one_heavy})")
     expect(r["firmware_vs_sklearn_max_abs"] < 0.1,  # a feature at a float32 threshold: one leaf
            f"the firmware's integer evaluation matches the learner's: {r['firmware_vs_sklearn_max_abs']}")
 elif CHECK == "bad_input":
