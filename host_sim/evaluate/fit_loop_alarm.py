@@ -142,6 +142,12 @@ def pooled(cases, alarm_of):
             "false_alarms_per_10min_resampled": resampled_false_alarm_rate(list(per_patient.values()))}
 
 
+def budget_rule():
+    """The choice rule's settings, as the reports give them."""
+    return {"false_alarms_per_10min": BUDGET_PER_10MIN, "quantile": BUDGET_QUANTILE,
+            "resampled_patients": RESAMPLE_PATIENTS, "resamples": RESAMPLES, "seed": RESAMPLE_SEED}
+
+
 def within_budget(row):
     """The choice rule: the resampled quantile of the false-alarm rate within the budget."""
     return row["false_alarms_per_10min_resampled"] <= BUDGET_PER_10MIN
@@ -196,8 +202,7 @@ def main():
                "trees": features.TREES, "depth": features.DEPTH, "learning_rate": RATE,
                "raise_steps": RAISE_STEPS, "clear_steps": CLEAR_STEPS, "hysteresis": HYSTERESIS,
                "budget_false_alarms_per_10min": BUDGET_PER_10MIN,
-               "budget_rule": {"quantile": BUDGET_QUANTILE, "resampled_patients": RESAMPLE_PATIENTS,
-                               "resamples": RESAMPLES, "seed": RESAMPLE_SEED},
+               "budget_rule": budget_rule(),
                "chosen": chosen,
                "held_out_by_level": levels, "reduced_model_self_lock": model_alarm,
                "firmware_vs_sklearn_max_abs": mismatch}

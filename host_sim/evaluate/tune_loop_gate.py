@@ -12,9 +12,8 @@ trees fitted with the case's patient left out (fit_loop_alarm.py's fit), so the 
 flattered by the development set's in-sample trees; the excess is computed as the firmware does:
 at each fresh tip pose (the period whose time reaches the sample's), on the odometer's travel
 (tune_tip_odometer.py's advances, sigmoid-corrected within 100 mm) and the insertion at that
-period, held between poses; before the first pose the alarm is the one without the tracker.
-Before the first pose the raise level is the one without the tracker, read from the generated
-loop_alarm.cpp (run fit_loop_alarm.py first). Scored with the scorecard's rule; kept: the most
+period, held between poses; before the first pose the alarm is the one without the tracker, its
+raise level read from the generated loop_alarm.cpp (run fit_loop_alarm.py first). Scored with the scorecard's rule; kept: the most
 onsets within 0.5 s whose false alarms meet issue 21's bound (2 per 10 minutes) at the 90th
 percentile over resampled sets of 20 patients (fit_loop_alarm.py's margin rule), ties to fewer
 false alarms. Needs Debian's python3-sklearn, python3-numpy and python3-matplotlib (the picture
@@ -158,8 +157,7 @@ def main():
     best = loop.best_within_budget(rows)
     report = {"eval_dir": a.eval_dir, "cases": len(cases), "level_without_tracker": without_level,
               "without_tracker": without,
-              "budget_rule": {"false_alarms_per_10min": loop.BUDGET_PER_10MIN, "quantile": loop.BUDGET_QUANTILE,
-                              "resampled_patients": loop.RESAMPLE_PATIENTS, "resamples": loop.RESAMPLES},
+              "budget_rule": loop.budget_rule(),
               "grid": rows, "chosen": best}
     with open(a.out, "w") as f:
         json.dump(report, f, indent=1)
