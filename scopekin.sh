@@ -12,6 +12,7 @@ MAIN_PACKAGES=(
   cmake ninja-build g++ ccache
   libeigen3-dev libcli11-dev nlohmann-json3-dev
   python3 python3-matplotlib
+  libcpp-httplib-dev pkg-config
 )
 TEST_PACKAGES=(
   "${MAIN_PACKAGES[@]}"
@@ -22,6 +23,7 @@ TEST_PACKAGES=(
   python3-canmatrix python3-sklearn
   clang-14 libclang-rt-14-dev clang-format-14
   qemu-system-x86 busybox-static can-utils cpio xz-utils iproute2
+  chromium
 )
 ALL_PRESETS=(host asan aarch64 cortex-m4 fuzz)
 BUILD_JOBS=2
@@ -79,6 +81,17 @@ ensure_packages() {
     apt-get install -y --no-install-recommends "${missing[@]}"
 }
 
+# ensure_node: Node.js (>= 18) and npm, which bundle the browser view's page at build time
+# (host_sim/view/web: npm ci from the npm registry, then esbuild).  A machine that already has
+# both (from Debian or elsewhere) keeps them; otherwise Debian's nodejs and npm are installed.
+ensure_node() {
+  if command -v node >/dev/null && command -v npm >/dev/null &&
+     node -e 'process.exit(Number(process.versions.node.split(".")[0]) >= 18 ? 0 : 1)'; then
+    return 0
+  fi
+  ensure_packages nodejs npm
+}
+
 # use_compiler_cache: compile through ccache, so that a second build of the same sources (another
 # clone, a CI run after a small change) recompiles only what changed.  Paths are hashed relative to
 # the checkout (CCACHE_BASEDIR, CCACHE_NOHASHDIR), so clones in other folders share the cache; a
@@ -101,6 +114,7 @@ stage() {
 cmd_main() {
   stage 1 4 "packages: ${MAIN_PACKAGES[*]}"
   ensure_packages "${MAIN_PACKAGES[@]}"
+  ensure_node
   use_compiler_cache
   stage 2 4 "configure: cmake --preset app"
   cmake --preset app --log-level=WARNING
@@ -151,6 +165,7 @@ cmd_test() {
 # host-quick test preset.  Prints the summary; fails if anything failed.
 run_presets() {
   ensure_packages "${TEST_PACKAGES[@]}"
+  ensure_node
   use_compiler_cache
   mkdir -p build/logs
   rm -f build/logs/failed_tails.log

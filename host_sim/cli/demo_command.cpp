@@ -26,6 +26,17 @@ struct DemoOptions {
     bool quiet = false;
 };
 
+/// The demo's shapes for `scopekin view` (frames.jsonl): 10 per simulated second, about 1 MB per
+/// 10 s of run.
+constexpr double kDemoFrames_Hz = 10.0;
+
+/// This program's path, for the command line the demo prints last.
+std::string this_program() {
+    std::error_code ec;
+    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? std::string("scopekin") : self.string();
+}
+
 std::string default_folder() {
     const std::time_t now = std::time(nullptr);
     char name[64];
@@ -62,6 +73,7 @@ int run_demo(const DemoOptions& options) {
         live.seed = options.seed;
         live.quiet = options.quiet;
         live.command = "demo";
+        live.frames_hz = kDemoFrames_Hz;
         // The plots are drawn before summary.json is renamed (it is renamed last of all).
         std::optional<ProgramResult> plots;
         live.before_summary = [&](const fs::path& summary_part, bool complete) {
@@ -85,10 +97,12 @@ int run_demo(const DemoOptions& options) {
         const double wall =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::printf(
-            "\nwrote into %s: recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, "
-            "summary.json, forces.png, "
-            "advance.png, snapshots.png (%.1f s in all)\n",
-            dir.string().c_str(), wall);
+            "\nwrote into %s: recording.csv, world.csv, firmware.csv, truth.csv, frames.jsonl, "
+            "snapshots.json, summary.json, forces.png, "
+            "advance.png, snapshots.png (%.1f s in all)\n"
+            "to see it in a browser (3D replay, the box's estimate beside the truth):\n  %s view "
+            "%s\n",
+            dir.string().c_str(), wall, this_program().c_str(), dir.string().c_str());
         return 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin demo: " << e.what() << "\n";
@@ -112,9 +126,11 @@ void add_demo_command(CLI::App& app) {
         "assistant presses on "
         "the abdomen, into the cecum. Prints "
         "the alarm timeline, the box's fault flags and a summary table; writes "
-        "recording.csv, world.csv, firmware.csv, truth.csv, snapshots.json, summary.json "
+        "recording.csv, world.csv, firmware.csv, truth.csv, frames.jsonl (the shapes `scopekin "
+        "view` replays, 10 per second), snapshots.json, summary.json "
         "and the plots forces.png, advance.png, "
-        "snapshots.png. Exit status 0 done, 1 the simulation failed, 2 invalid "
+        "snapshots.png, and prints the `scopekin view` command that shows the run in a browser. "
+        "Exit status 0 done, 1 the simulation failed, 2 invalid "
         "scenario, 3 an output (or a plot) "
         "cannot be written.");
     cmd->add_option("--out", options->out,

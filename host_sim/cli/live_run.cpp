@@ -53,8 +53,8 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
         dir, {"summary.json", "recording.csv", "recording.incomplete.csv", "world.csv",
               "world.incomplete.csv", "firmware.csv", "firmware.incomplete.csv", "truth.csv",
               "truth.incomplete.csv", "contacts.csv", "contacts.incomplete.csv", "procedure.csv",
-              "procedure.incomplete.csv", "snapshots.json", "forces.png", "advance.png",
-              "snapshots.png"});
+              "procedure.incomplete.csv", "frames.jsonl", "frames.incomplete.jsonl",
+              "snapshots.json", "forces.png", "advance.png", "snapshots.png"});
     PartFile recording(dir / "recording.csv", dir / "recording.incomplete.csv");
     PartFile world(dir / "world.csv", dir / "world.incomplete.csv");
     PartFile firmware(dir / "firmware.csv", dir / "firmware.incomplete.csv");
@@ -64,6 +64,9 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     if (sc.outputs.contacts_file)
         contacts =
             std::make_unique<PartFile>(dir / "contacts.csv", dir / "contacts.incomplete.csv");
+    std::unique_ptr<PartFile> frames;
+    if (options.frames_hz > 0)
+        frames = std::make_unique<PartFile>(dir / "frames.jsonl", dir / "frames.incomplete.jsonl");
     if (!options.quiet && sc.physician)
         std::cerr << options.command << ": " << sc.source << ": a physician ("
                   << model::physician_style_name(sc.physician->style) << ", seed "
@@ -78,11 +81,16 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
                   << host_sim::kBoxPeriodUs / 1000 << " ms, seed " << options.seed << std::endl;
     ProgressBar bar(options.quiet);
     LiveRunReport report;
-    report.result = host_sim::run_live(
-        sc, sensor_config, options.seed,
-        {&recording.stream(), &world.stream(), &firmware.stream(),
-         contacts ? &contacts->stream() : nullptr, &truth.stream(), &procedure.stream()},
-        [&](const model::SimulationProgress& p) { bar.update(p); });
+    host_sim::LiveStreams streams{&recording.stream(),
+                                  &world.stream(),
+                                  &firmware.stream(),
+                                  contacts ? &contacts->stream() : nullptr,
+                                  &truth.stream(),
+                                  &procedure.stream(),
+                                  frames ? &frames->stream() : nullptr,
+                                  options.frames_hz > 0 ? 1.0 / options.frames_hz : 0.0};
+    report.result = host_sim::run_live(sc, sensor_config, options.seed, streams,
+                                       [&](const model::SimulationProgress& p) { bar.update(p); });
     bar.done();
     const host_sim::LiveResult& r = report.result;
     const model::SimulationSummary& sum = r.world;
@@ -94,6 +102,7 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
     files["truth"] = truth.finish(sum.complete).filename().string();
     files["procedure"] = procedure.finish(sum.complete).filename().string();
     if (contacts) files["contacts"] = contacts->finish(sum.complete).filename().string();
+    if (frames) files["frames"] = frames->finish(sum.complete).filename().string();
     write_json(dir / "snapshots.json", r.snapshots);
     files["snapshots"] = "snapshots.json";
 

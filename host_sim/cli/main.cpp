@@ -15,6 +15,7 @@
 #include "host_sim/cli/simulate_command.hpp"
 #include "host_sim/cli/static_command.hpp"
 #include "host_sim/cli/verify_command.hpp"
+#include "host_sim/cli/view_command.hpp"
 #include "model/model_error.hpp"
 
 int main(int argc, char** argv) {
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
     scopekin::cli::add_discrepancy_command(app);
     scopekin::cli::add_patient_commands(app);
     scopekin::cli::add_evaluate_commands(app);
+    scopekin::cli::add_view_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::RuntimeError& status) {

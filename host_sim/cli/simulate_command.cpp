@@ -48,6 +48,7 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
     live.out = options.out;
     live.seed = options.seed;
     live.quiet = options.quiet;
+    live.frames_hz = options.frames_hz;
     const LiveRunReport report = run_live_to_folder(sc, live);
     const Json& s = report.summary;
     const fs::path dir(options.out);
@@ -78,9 +79,9 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
                       .c_str()
                 : "");
     std::printf(
-        "wrote recording.csv, world.csv, firmware.csv, truth.csv, procedure.csv, snapshots.json, "
+        "wrote recording.csv, world.csv, firmware.csv, truth.csv, procedure.csv, %ssnapshots.json, "
         "summary.json into %s\n",
-        dir.string().c_str());
+        options.frames_hz > 0 ? "frames.jsonl, " : "", dir.string().c_str());
     return 0;
 }
 
@@ -178,6 +179,12 @@ void add_simulate_command(CLI::App& app) {
                     "2^64-1)")
         ->default_val(1)
         ->check(whole_number());
+    cmd->add_option("--frames", options->frames_hz,
+                    "World scenarios: also write DIR/frames.jsonl, the scope's and the colon's "
+                    "shapes and the contact forces this many times per simulated second (0 .. "
+                    "100; 0, the default: none), which `scopekin view DIR` replays in 3D")
+        ->default_val(0)
+        ->check(CLI::Range(0.0, 100.0));
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
 }

@@ -13,6 +13,7 @@ struct SimulateOptions {
     std::string out;
     std::uint64_t seed = 1;
     bool quiet = false;
+    double frames_hz = 0;  ///< frames.jsonl for `scopekin view` (world scenarios); 0: none
 };
 
 /// The command's work; returns its exit status (also used by `batch`). Throws ModelError for an

@@ -126,6 +126,15 @@ std::optional<double> optional_number(const Json& j, const char* key) {
 
 }  // namespace
 
+std::vector<std::vector<double>> read_number_columns(const fs::path& file,
+                                                     const std::vector<std::string>& names) {
+    const Columns c = read_columns(file, names);
+    std::vector<std::vector<double>> out;
+    for (std::size_t w = 0; w < names.size(); ++w)
+        out.push_back(numbers(c, w, file, names[w]));
+    return out;
+}
+
 std::vector<Episode> read_episodes(const Json& list, const std::string& where) {
     std::vector<Episode> out;
     if (!list.is_array()) throw CaseDataError(where + ": expected a list of episodes");
@@ -180,6 +189,7 @@ static void cut_where_the_scope_went_through_the_wall(CaseRun& run, double lost_
     cut(run.box_contact_level);
     cut(run.box_fault_flags);
     cut(run.handle_force_N);
+    cut(run.handle_torque_Nmm);
     cut(run.handle_insertion_mm);
     const auto samples = static_cast<std::size_t>(
         std::lower_bound(run.sample_time_s.begin(), run.sample_time_s.end(), lost_s - 1e-9) -
@@ -298,17 +308,22 @@ CaseRun read_case_run(const fs::path& folder) {
     } catch (const recording::RecordingError& e) {
         throw CaseDataError(rec_file.string() + ": " + e.what());
     }
-    double force = kNaN, insertion = kNaN;
+    double force = kNaN, torque = kNaN, insertion = kNaN;
+    double last_torque = kNaN;  // the torque of the last sample kept (sample_force_N's)
     std::size_t next = 0;
     run.handle_force_N.reserve(run.time_s.size());
     for (const recording::RecordingRow& row : rec.rows) {
         const double row_s = static_cast<double>(row.time_us) * 1e-6;
-        if (row.handle) force = row.handle->force_N;
+        if (row.handle) {
+            force = row.handle->force_N;
+            torque = row.handle->torque_Nmm;
+        }
         if (row.insertion_roll) insertion = row.insertion_roll->insertion_mm;
         if (!row.handle && !row.insertion_roll) continue;
         while (next < run.time_s.size() && run.time_s[next] < row_s - 1e-9) {
             run.handle_force_N.push_back(run.sample_force_N.empty() ? kNaN
                                                                     : run.sample_force_N.back());
+            run.handle_torque_Nmm.push_back(run.sample_force_N.empty() ? kNaN : last_torque);
             run.handle_insertion_mm.push_back(
                 run.sample_insertion_mm.empty() ? kNaN : run.sample_insertion_mm.back());
             ++next;
@@ -316,9 +331,11 @@ CaseRun read_case_run(const fs::path& folder) {
         run.sample_time_s.push_back(row_s);
         run.sample_force_N.push_back(force);
         run.sample_insertion_mm.push_back(insertion);
+        last_torque = torque;
     }
     while (next < run.time_s.size()) {
         run.handle_force_N.push_back(run.sample_force_N.empty() ? kNaN : run.sample_force_N.back());
+        run.handle_torque_Nmm.push_back(run.sample_force_N.empty() ? kNaN : last_torque);
         run.handle_insertion_mm.push_back(
             run.sample_insertion_mm.empty() ? kNaN : run.sample_insertion_mm.back());
         ++next;

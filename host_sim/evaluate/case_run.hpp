@@ -72,6 +72,7 @@ struct CaseRun {
     // recording.csv: the handle force and insertion the box received, at each period (the last
     // sample at or before the period's time; NaN before the first)
     std::vector<double> handle_force_N;
+    std::vector<double> handle_torque_Nmm;
     std::vector<double> handle_insertion_mm;
     /// The same, at every sensor sample (1 kHz): what the handle force monitor filters.
     std::vector<double> sample_time_s, sample_force_N, sample_insertion_mm;
@@ -83,6 +84,12 @@ struct CaseRun {
 /// Throws CaseDataError (a missing file, a missing column, rows that do not join, a cell that
 /// is not a number), naming the file and line.
 CaseRun read_case_run(const std::filesystem::path& folder);
+
+/// The named columns of a CSV file without quoted cells (firmware.csv, truth.csv) as numbers, one
+/// vector per name (an empty cell is NaN). Throws CaseDataError naming the file, line and column
+/// (a missing file or column, a row of another width, a cell that is not a number).
+std::vector<std::vector<double>> read_number_columns(const std::filesystem::path& file,
+                                                     const std::vector<std::string>& names);
 
 /// summary.json "procedure" (physicians' contract), or unknown.
 ProcedureOutcome read_procedure(const nlohmann::json& summary);

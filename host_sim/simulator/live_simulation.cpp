@@ -57,6 +57,36 @@ Json sensor_counters_json(const sensors::SensorSuiteCounters& c) {
             {"tip_force", counters_json(c.tip_force)}};
 }
 
+/// A value rounded to 0.1 (mm, N): frames.jsonl's resolution.
+Json tenth(double v) {
+    return Json(std::round(v * 10.0) / 10.0);
+}
+
+Json tenths(const Json& xyz) {
+    return Json::array(
+        {tenth(xyz[0].get<double>()), tenth(xyz[1].get<double>()), tenth(xyz[2].get<double>())});
+}
+
+/// One line of frames.jsonl from a snapshot (host_sim/view/README.md, "frames.jsonl"): time_s,
+/// scope_mm, colon_mm (displaced), contacts (position_mm, force_N, normal_force_N), estimated.
+std::string frame_line(const Json& snap) {
+    Json f;
+    f["time_s"] = snap["time_s"];
+    Json scope = Json::array(), colon = Json::array(), contacts = Json::array();
+    for (const Json& p : snap["scope_mm"])
+        scope.push_back(tenths(p));
+    for (const Json& p : snap["colon_mm"])
+        colon.push_back(tenths(p));
+    for (const Json& c : snap["contacts"])
+        contacts.push_back({{"position_mm", tenths(c["position_mm"])},
+                            {"force_N", tenths(c["force_N"])},
+                            {"normal_force_N", tenth(c["normal_force_N"].get<double>())}});
+    f["scope_mm"] = scope;
+    f["colon_mm"] = colon;
+    f["contacts"] = contacts;
+    return f.dump();
+}
+
 }  // namespace
 
 std::string region_at_path(const model::ColonTube& colon, double path_mm) {
@@ -109,8 +139,7 @@ LiveResult run_live(const model::Scenario& scenario,
     });
 
     Json snapshots = Json::array();
-    auto take_snapshot = [&](const std::string& label, bool last = false) {
-        if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
+    auto snapshot_now = [&](const std::string& label) {
         Json snap = reader.snapshot(*world, label);
         Json estimated = Json::array();  // the box's stations in the last period
         const kinetics::Outputs& o = firmware.box().outputs();
@@ -123,7 +152,20 @@ LiveResult run_live(const model::Scenario& scenario,
                  {"tangential_N", static_cast<double>(st.tangential_force_N.raw()) / 65536.0}});
         }
         snap["estimated"] = estimated;
-        snapshots.push_back(snap);
+        return snap;
+    };
+    auto take_snapshot = [&](const std::string& label, bool last = false) {
+        if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
+        snapshots.push_back(snapshot_now(label));
+    };
+
+    // A frame for the view: the snapshot's shapes and contacts, coordinates to 0.1 mm (the
+    // view's scale; a tenth of the file), and the box's stations as the snapshots carry them.
+    double next_frame_s = -1.0;
+    auto write_frame = [&](double time_s) {
+        if (streams.frames == nullptr || time_s + 1e-9 < next_frame_s) return;
+        next_frame_s = time_s + streams.frames_period_s;
+        *streams.frames << frame_line(snapshot_now("")) << '\n';
     };
 
     WorldReadout previous = reader.read(*world);
@@ -176,6 +218,7 @@ LiveResult run_live(const model::Scenario& scenario,
                 result.peak_true_contact_region = std::string(model::region_name(c.region));
             }
         previous = latest;
+        write_frame(w.time_s());
         if (snapshot_wanted) {
             take_snapshot(snapshot_label);
             snapshot_wanted = false;

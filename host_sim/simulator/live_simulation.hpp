@@ -29,6 +29,10 @@ struct LiveStreams {
         nullptr;  ///< truth.csv (what the box estimates, true, per box period), optional
     std::ostream* procedure =
         nullptr;  ///< procedure.csv (what the hand did, at the output rate), optional
+    /// frames.jsonl (the shapes `scopekin view` replays: one JSON line per frame, at most every
+    /// frames_period_s), optional
+    std::ostream* frames = nullptr;
+    double frames_period_s = 0.1;
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand

@@ -1,0 +1,129 @@
+#include "host_sim/cli/view_command.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "host_sim/cli/cli_support.hpp"
+#include "host_sim/view/view_data.hpp"
+#include "host_sim/view/view_page.hpp"
+#include "host_sim/view/view_server.hpp"
+
+extern char** environ;
+
+namespace scopekin::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ViewOptions {
+    std::string folder;
+    std::uint16_t port = 8765;
+    bool no_browser = false;
+    std::string export_file;
+};
+
+/// Asks the desktop to open `url` (xdg-open); says so if it cannot.
+void open_browser(const std::string& url) {
+    std::string program = "xdg-open";
+    std::string argument = url;
+    char* argv[] = {program.data(), argument.data(), nullptr};
+    posix_spawn_file_actions_t quiet;
+    posix_spawn_file_actions_init(&quiet);
+    posix_spawn_file_actions_addopen(&quiet, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&quiet, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    const int failed = posix_spawnp(&pid, program.c_str(), &quiet, nullptr, argv, environ);
+    posix_spawn_file_actions_destroy(&quiet);
+    int status = 0;
+    if (failed != 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) ||
+        WEXITSTATUS(status) != 0)
+        std::printf("(no browser could be opened here: open the address above in one)\n");
+    std::fflush(stdout);
+}
+
+int run_view(const ViewOptions& o) {
+    std::string page;
+    try {
+        std::cerr << "scopekin view: reading " << o.folder << " ..." << std::endl;
+        const nlohmann::json data = view::read_run_view(o.folder);
+        std::cerr << "scopekin view: " << data["series"]["time_s"].size() << " timeline points, "
+                  << data["alarms"].size() << " alarms, " << data["frames"].size()
+                  << " shapes (from " << data["frames_source"].get<std::string>() << ")"
+                  << std::endl;
+        page = view::render_view_page(data, view::view_assets_folder());
+    } catch (const view::ViewDataError& e) {
+        std::cerr << "scopekin view: " << e.what() << "\n";
+        return 2;
+    } catch (const view::ViewAssetsError& e) {
+        std::cerr << "scopekin view: " << e.what() << "\n";
+        return 2;
+    }
+    if (!o.export_file.empty()) {
+        try {
+            PartFile out{fs::path(o.export_file)};
+            out.stream() << page;
+            out.finish(true);
+        } catch (const OutputError& e) {
+            std::cerr << "scopekin view: " << e.what() << "\n";
+            return 3;
+        }
+        std::printf(
+            "wrote %s (%.1f MB): one file with the run in it; it opens from disk in a "
+            "browser, without a server\n",
+            o.export_file.c_str(), static_cast<double>(page.size()) / 1e6);
+        return 0;
+    }
+    try {
+        view::ServeOptions serve;
+        serve.port = o.port;
+        serve.on_listening = [&](const std::string& url) {
+            std::printf("scopekin view: %s at %s (Ctrl-C to stop)\n", o.folder.c_str(),
+                        url.c_str());
+            std::fflush(stdout);
+            if (!o.no_browser) open_browser(url);
+        };
+        view::serve_page(page, serve);
+    } catch (const view::ViewServerError& e) {
+        std::cerr << "scopekin view: " << e.what() << "\n";
+        return 2;
+    }
+    return 0;
+}
+
+}  // namespace
+
+void add_view_command(CLI::App& app) {
+    auto options = std::make_shared<ViewOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "view",
+        "Show a run in a browser: the colon (the run's patient, regions coloured, its displaced "
+        "shape) and the scope in 3D with the contact forces as arrows, the box's estimate (its "
+        "tip with a 1-SD sphere, its stations coloured by force) beside the truth, and a "
+        "timeline (handle force and torque, the tip along the colon, the largest contact force, "
+        "the alarms as bands, the truth's episodes and the fault flags as strips) with play, "
+        "speed, scrub and next alarm. DIR is a folder of `scopekin simulate` (with --frames for "
+        "the shapes over time; without, the snapshots' key moments), `scopekin demo` or one case "
+        "of `scopekin evaluate`. Serves the page on 127.0.0.1 and prints its address until "
+        "Ctrl-C, or writes it as one self-contained file with --export. Exit status 0 done, 2 "
+        "no run in DIR, a malformed or truncated file, the port in use, or the page's scripts "
+        "not built, 3 the exported file cannot be written.");
+    cmd->add_option("folder", options->folder, "The run's folder")->required();
+    cmd->add_option("--port", options->port, "Port on 127.0.0.1 (0: any free one; default 8765)")
+        ->default_val(8765)
+        ->check(CLI::Range(0, 65535));
+    cmd->add_flag("--no-browser", options->no_browser,
+                  "Do not ask the desktop to open a browser (print the address only)");
+    cmd->add_option("--export", options->export_file,
+                    "Write the page, the run's data inside, to this HTML file and exit (no "
+                    "server; it opens from disk)");
+    cmd->callback([options]() { throw CLI::RuntimeError(run_view(*options)); });
+}
+
+}  // namespace scopekin::cli

@@ -1,0 +1,157 @@
+// The page of `scopekin view`: a run's colon and scope in 3D above its timeline, the box's
+// estimate beside the truth, played, scrubbed and stepped alarm by alarm (host_sim/view/README.md).
+import 'uplot/dist/uPlot.min.css';
+import './view.css';
+import { readEmbeddedData, indexAtOrBefore, alarmsAt, nextAlarmAfter } from './run_data.js';
+import { RunScene } from './scene.js';
+import { Timeline, kAlarmStyle } from './timeline.js';
+
+const kSpeeds = [0.25, 0.5, 1, 2, 5, 10];
+
+class View {
+  constructor(data) {
+    this.data = data;
+    const t = data.series.time_s;
+    this.start_s = t.length ? t[0] : 0;
+    this.duration_s = t.length ? t[t.length - 1] : 0;
+    this.time_s = this.start_s;
+    this.playing = false;
+    this.speed = 1;
+    this.frameTimes = data.frames.map((f) => f.time_s);
+    document.getElementById('title').textContent = data.title;
+    document.getElementById('subtitle').textContent = data.subtitle;
+    this.scene = new RunScene(document.getElementById('scene'), data);
+    this.timeline = new Timeline(document.getElementById('timeline'), this);
+    this.buildControls();
+    this.buildAlarmList();
+    window.addEventListener('resize', () => this.resize());
+    this.setTime(this.start_s);
+    let last = performance.now();
+    const loop = (now) => {
+      const dt = (now - last) / 1000;
+      last = now;
+      if (this.playing) {
+        const next = this.time_s + dt * this.speed;
+        if (next >= this.duration_s) this.playing = false;
+        this.setTime(Math.min(next, this.duration_s));
+        this.updatePlayButton();
+      }
+      this.scene.render();
+      this.framesDrawn += 1;
+      requestAnimationFrame(loop);
+    };
+    this.framesDrawn = 0;
+    requestAnimationFrame(loop);
+  }
+
+  buildControls() {
+    const play = document.getElementById('play');
+    play.addEventListener('click', () => {
+      if (this.time_s >= this.duration_s) this.setTime(this.start_s);
+      this.playing = !this.playing;
+      this.updatePlayButton();
+    });
+    const speed = document.getElementById('speed');
+    for (const s of kSpeeds) {
+      const o = document.createElement('option');
+      o.value = String(s);
+      o.textContent = `${s}×`;
+      if (s === 1) o.selected = true;
+      speed.appendChild(o);
+    }
+    speed.addEventListener('change', () => { this.speed = Number(speed.value); });
+    const scrub = document.getElementById('scrub');
+    scrub.min = String(this.start_s);
+    scrub.max = String(this.duration_s);
+    scrub.step = '0.005';
+    scrub.addEventListener('input', () => this.setTime(Number(scrub.value)));
+    document.getElementById('next-alarm').addEventListener('click', () => this.jumpToNextAlarm());
+    window.addEventListener('keydown', (e) => {
+      if (e.key === ' ') { e.preventDefault(); play.click(); }
+      if (e.key === 'n') this.jumpToNextAlarm();
+    });
+  }
+
+  updatePlayButton() {
+    document.getElementById('play').textContent = this.playing ? '❚❚ pause' : '▶ play';
+  }
+
+  buildAlarmList() {
+    const list = document.getElementById('alarms');
+    this.alarmItems = this.data.alarms.map((a, k) => {
+      const li = document.createElement('li');
+      li.dataset.index = String(k);
+      const style = kAlarmStyle[a.kind];
+      const end = a.end_s === null ? 'end' : `${a.end_s.toFixed(2)} s`;
+      li.innerHTML = `<span class="swatch" style="background:${style?.solid ?? '#888'}"></span>` +
+        `${a.start_s.toFixed(2)} s – ${end}: ${style?.label ?? a.kind}`;
+      li.addEventListener('click', () => this.setTime(a.start_s));
+      list.appendChild(li);
+      return li;
+    });
+    document.getElementById('alarm-count').textContent = String(this.data.alarms.length);
+  }
+
+  jumpToNextAlarm() {
+    const a = nextAlarmAfter(this.data.alarms, this.time_s);
+    if (a) this.setTime(a.start_s);
+  }
+
+  /// Moves the cursor: the scene's frame, the box's estimate, the alarms up, the timeline.
+  setTime(t) {
+    this.time_s = Math.min(Math.max(t, this.start_s), this.duration_s);
+    const s = this.data.series;
+    const row = indexAtOrBefore(s.time_s, this.time_s);
+    const frame = indexAtOrBefore(this.frameTimes, this.time_s);
+    const stations = (s.station_path_mm[row] || []).map((p, k) => ({ path_mm: p, normal_N: s.station_normal_N[row][k] }));
+    this.scene.show(frame, {
+      true_tip_path_mm: s.true_tip_path_mm[row] ?? NaN,
+      box_tip_path_mm: s.box_tip_path_mm[row] ?? NaN,
+      box_tip_sd_mm: s.box_tip_sd_mm[row] ?? NaN,
+      stations,
+    });
+    const up = new Set(alarmsAt(this.data.alarms, this.time_s).map((a) => this.data.alarms.indexOf(a)));
+    this.alarmItems.forEach((li, k) => li.classList.toggle('active', up.has(k)));
+    document.getElementById('time').textContent = `${this.time_s.toFixed(2)} s`;
+    document.getElementById('frame-time').textContent = this.data.frames.length
+      ? `shape at ${this.frameTimes[frame].toFixed(2)} s${this.data.frames[frame].label ? ` (${this.data.frames[frame].label})` : ''}`
+      : 'no shapes recorded';
+    const readout = document.getElementById('readout');
+    const f = (v, d = 1) => (v === null || v === undefined ? '–' : v.toFixed(d));
+    readout.textContent = `handle ${f(s.handle_force_N[row])} N · insertion ${f(s.insertion_mm[row], 0)} mm · ` +
+      `tip: box ${f(s.box_tip_path_mm[row], 0)} ± ${f(s.box_tip_sd_mm[row], 0)} mm, true ${f(s.true_tip_path_mm[row], 0)} mm · ` +
+      `largest force: box ${f(s.box_max_force_N[row])} N, true ${f(s.true_max_force_N[row])} N`;
+    document.getElementById('scrub').value = String(this.time_s);
+    this.timeline.redraw();
+  }
+
+  resize() {
+    this.scene.resize(document.getElementById('scene'));
+    this.timeline.resize(document.getElementById('timeline').clientWidth);
+  }
+
+  /// What the browser test reads (host_sim/view/web/test/view_test.mjs).
+  state() {
+    return {
+      time_s: this.time_s,
+      frame_index: this.scene.frameIndex,
+      frames: this.data.frames.length,
+      frames_drawn: this.framesDrawn,
+      active_alarms: [...document.querySelectorAll('#alarms li.active')].map((li) => Number(li.dataset.index)),
+      alarms: this.data.alarms,
+    };
+  }
+}
+
+function start() {
+  try {
+    const view = new View(readEmbeddedData(document));
+    window.scopekinView = view;
+  } catch (e) {
+    document.getElementById('error').textContent = `This view cannot be shown: ${e.message}`;
+    throw e;
+  }
+}
+
+if (document.readyState === 'loading') document.addEventListener('DOMContentLoaded', start);
+else start();
