@@ -81,14 +81,16 @@ LiveRunReport run_live_to_folder(const model::Scenario& sc, const LiveRunOptions
                   << host_sim::kBoxPeriodUs / 1000 << " ms, seed " << options.seed << std::endl;
     ProgressBar bar(options.quiet);
     LiveRunReport report;
-    host_sim::LiveStreams streams{&recording.stream(),
-                                  &world.stream(),
-                                  &firmware.stream(),
-                                  contacts ? &contacts->stream() : nullptr,
-                                  &truth.stream(),
-                                  &procedure.stream(),
-                                  frames ? &frames->stream() : nullptr,
-                                  options.frames_hz > 0 ? 1.0 / options.frames_hz : 0.0};
+    host_sim::LiveStreams streams;
+    streams.recording = &recording.stream();
+    streams.world = &world.stream();
+    streams.firmware = &firmware.stream();
+    streams.contacts = contacts ? &contacts->stream() : nullptr;
+    streams.truth = &truth.stream();
+    streams.procedure = &procedure.stream();
+    streams.frames = frames ? &frames->stream() : nullptr;
+    streams.frames_period_s = options.frames_hz > 0 ? 1.0 / options.frames_hz : 0.0;
+    streams.view_step = options.view_step;
     report.result = host_sim::run_live(sc, sensor_config, options.seed, streams,
                                        [&](const model::SimulationProgress& p) { bar.update(p); });
     bar.done();

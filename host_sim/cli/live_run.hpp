@@ -23,6 +23,8 @@ struct LiveRunOptions {
     std::string command = "simulate";  ///< for messages
     /// Shapes for `scopekin view` (frames.jsonl) this many times per simulated second; 0: none.
     double frames_hz = 0;
+    /// The live view (`simulate --view`): every world step, optional.
+    std::function<void(const host_sim::LiveViewStep&)> view_step;
     /// Runs with every other file finished (complete: the run completed) and summary.json still
     /// summary.json.part (its path is given); summary.json is renamed after it returns.
     std::function<void(const std::filesystem::path& summary_part, bool complete)> before_summary;

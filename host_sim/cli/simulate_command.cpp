@@ -16,6 +16,9 @@
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
+#include "host_sim/view/live_view.hpp"
+#include "host_sim/view/view_data.hpp"
+#include "host_sim/view/view_page.hpp"
 #include "model/scenario/scenario.hpp"
 #include "model/scenario/simulation.hpp"
 
@@ -43,13 +46,8 @@ Json summary_header(const model::Scenario& sc, const char* kind, bool complete,
     return summary;
 }
 
-int run_world(const model::Scenario& sc, const SimulateOptions& options) {
-    LiveRunOptions live;
-    live.out = options.out;
-    live.seed = options.seed;
-    live.quiet = options.quiet;
-    live.frames_hz = options.frames_hz;
-    const LiveRunReport report = run_live_to_folder(sc, live);
+/// The run's lines on stdout and stderr; returns the exit status (0 complete, 1 failed).
+int report_world(const LiveRunReport& report, const SimulateOptions& options) {
     const Json& s = report.summary;
     const fs::path dir(options.out);
     for (const auto& w : s["warnings"])
@@ -81,8 +79,60 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
     std::printf(
         "wrote recording.csv, world.csv, firmware.csv, truth.csv, procedure.csv, %ssnapshots.json, "
         "summary.json into %s\n",
-        options.frames_hz > 0 ? "frames.jsonl, " : "", dir.string().c_str());
+        options.frames_hz > 0 || options.view ? "frames.jsonl, " : "", dir.string().c_str());
     return 0;
+}
+
+/// The live view once the run has ended: the page becomes the run's replay (if it can be read),
+/// served until Ctrl-C.
+void finish_live_view(view::LiveView& live_view, const fs::path& dir) {
+    std::string replay;
+    try {
+        replay = view::render_view_page(view::read_run_view(dir), view::view_assets_folder());
+    } catch (const view::ViewDataError& e) {
+        std::cerr << "scopekin simulate: the view keeps the live page: " << e.what() << "\n";
+    }
+    live_view.finish(replay);
+    std::printf(
+        "scopekin simulate: %s at %s (%zu live messages sent; reload for the replay; "
+        "Ctrl-C to stop)\n",
+        replay.empty() ? "the live view stays" : "the run's replay is", live_view.url().c_str(),
+        live_view.messages());
+    std::fflush(stdout);
+    live_view.wait_for_stop_signal();
+}
+
+int run_world(const model::Scenario& sc, const SimulateOptions& options) {
+    std::unique_ptr<view::LiveView> live_view;
+    if (options.view) {
+        try {
+            live_view = std::make_unique<view::LiveView>(
+                sc, fs::path(options.out).filename().string(), options.port);
+        } catch (const view::ViewServerError& e) {
+            std::cerr << "scopekin simulate: --view: " << e.what() << "\n";
+            return 2;
+        } catch (const view::ViewAssetsError& e) {
+            std::cerr << "scopekin simulate: --view: " << e.what() << "\n";
+            return 2;
+        }
+        std::printf("scopekin simulate: live view at %s\n", live_view->url().c_str());
+        std::fflush(stdout);
+        if (!options.no_browser) view::open_in_browser(live_view->url());
+    }
+    LiveRunOptions live;
+    live.out = options.out;
+    live.seed = options.seed;
+    live.quiet = options.quiet;
+    // The live view's replay wants the shapes over time: --view writes them at 10 Hz by default.
+    live.frames_hz = options.view && options.frames_hz == 0 ? 10.0 : options.frames_hz;
+    if (live_view)
+        live.view_step = [&live_view](const host_sim::LiveViewStep& step) {
+            live_view->step(step);
+        };
+    const LiveRunReport report = run_live_to_folder(sc, live);
+    const int status = report_world(report, options);
+    if (live_view) finish_live_view(*live_view, options.out);
+    return status;
 }
 
 int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
@@ -133,6 +183,11 @@ int run_free_beam(model::Scenario& sc, const SimulateOptions& options) {
 int run_simulate(const SimulateOptions& options) {
     model::Scenario sc = model::read_scenario_file(options.scenario);  // ModelError: exit 2
     try {
+        if (sc.kind == model::ScenarioKind::free_beam && options.view) {
+            std::cerr << "scopekin simulate: --view needs a world scenario (" << options.scenario
+                      << " is a free beam, solved statically)\n";
+            return 2;
+        }
         return sc.kind == model::ScenarioKind::free_beam ? run_free_beam(sc, options)
                                                          : run_world(sc, options);
     } catch (const OutputError& e) {
@@ -185,6 +240,19 @@ void add_simulate_command(CLI::App& app) {
                     "100; 0, the default: none), which `scopekin view DIR` replays in 3D")
         ->default_val(0)
         ->check(CLI::Range(0.0, 100.0));
+    CLI::Option* view_flag = cmd->add_flag(
+        "--view", options->view,
+        "World scenarios: stream the run to the browser view while it runs (`scopekin view`'s "
+        "page, live: at most 25 updates per second), then serve the run's replay there until "
+        "Ctrl-C (with frames.jsonl at 10 Hz unless --frames says otherwise). Prints the address; "
+        "exit status 2 if the port is in use");
+    cmd->add_option("--port", options->port, "With --view: the port on 127.0.0.1 (0: any free one)")
+        ->default_val(8765)
+        ->check(CLI::Range(0, 65535))
+        ->needs(view_flag);
+    cmd->add_flag("--no-browser", options->no_browser,
+                  "With --view: do not ask the desktop to open a browser")
+        ->needs(view_flag);
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
 }

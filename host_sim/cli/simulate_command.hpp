@@ -14,6 +14,9 @@ struct SimulateOptions {
     std::uint64_t seed = 1;
     bool quiet = false;
     double frames_hz = 0;  ///< frames.jsonl for `scopekin view` (world scenarios); 0: none
+    bool view = false;     ///< stream to the browser view while running (world scenarios)
+    std::uint16_t port = 8765;
+    bool no_browser = false;
 };
 
 /// The command's work; returns its exit status (also used by `batch`). Throws ModelError for an

@@ -1,9 +1,5 @@
 #include "host_sim/cli/view_command.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -14,8 +10,6 @@
 #include "host_sim/view/view_data.hpp"
 #include "host_sim/view/view_page.hpp"
 #include "host_sim/view/view_server.hpp"
-
-extern char** environ;
 
 namespace scopekin::cli {
 namespace {
@@ -28,25 +22,6 @@ struct ViewOptions {
     bool no_browser = false;
     std::string export_file;
 };
-
-/// Asks the desktop to open `url` (xdg-open); says so if it cannot.
-void open_browser(const std::string& url) {
-    std::string program = "xdg-open";
-    std::string argument = url;
-    char* argv[] = {program.data(), argument.data(), nullptr};
-    posix_spawn_file_actions_t quiet;
-    posix_spawn_file_actions_init(&quiet);
-    posix_spawn_file_actions_addopen(&quiet, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&quiet, 2, "/dev/null", O_WRONLY, 0);
-    pid_t pid = 0;
-    const int failed = posix_spawnp(&pid, program.c_str(), &quiet, nullptr, argv, environ);
-    posix_spawn_file_actions_destroy(&quiet);
-    int status = 0;
-    if (failed != 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) ||
-        WEXITSTATUS(status) != 0)
-        std::printf("(no browser could be opened here: open the address above in one)\n");
-    std::fflush(stdout);
-}
 
 int run_view(const ViewOptions& o) {
     std::string page;
@@ -81,15 +56,13 @@ int run_view(const ViewOptions& o) {
         return 0;
     }
     try {
-        view::ServeOptions serve;
-        serve.port = o.port;
-        serve.on_listening = [&](const std::string& url) {
-            std::printf("scopekin view: %s at %s (Ctrl-C to stop)\n", o.folder.c_str(),
-                        url.c_str());
-            std::fflush(stdout);
-            if (!o.no_browser) open_browser(url);
-        };
-        view::serve_page(page, serve);
+        view::PageServer server(std::move(page));
+        const std::string url = server.bind(o.port);
+        server.start();
+        std::printf("scopekin view: %s at %s (Ctrl-C to stop)\n", o.folder.c_str(), url.c_str());
+        std::fflush(stdout);
+        if (!o.no_browser) view::open_in_browser(url);
+        server.wait_for_stop_signal();
     } catch (const view::ViewServerError& e) {
         std::cerr << "scopekin view: " << e.what() << "\n";
         return 2;

@@ -57,34 +57,94 @@ Json sensor_counters_json(const sensors::SensorSuiteCounters& c) {
             {"tip_force", counters_json(c.tip_force)}};
 }
 
-/// A value rounded to 0.1 (mm, N): frames.jsonl's resolution.
-Json tenth(double v) {
-    return Json(std::round(v * 10.0) / 10.0);
+/// Appends x to 0.1 (mm, N): frames.jsonl's resolution ("-0.0" written as "0").
+void append_tenth(std::string& out, double x) {
+    char text[32];
+    const double rounded = std::round(x * 10.0) / 10.0;
+    std::snprintf(text, sizeof text, "%.1f", rounded == 0.0 ? 0.0 : rounded);
+    out += text;
 }
 
-Json tenths(const Json& xyz) {
-    return Json::array(
-        {tenth(xyz[0].get<double>()), tenth(xyz[1].get<double>()), tenth(xyz[2].get<double>())});
+void append_point(std::string& out, const Eigen::Vector3d& p) {
+    out += '[';
+    append_tenth(out, p.x());
+    out += ',';
+    append_tenth(out, p.y());
+    out += ',';
+    append_tenth(out, p.z());
+    out += ']';
 }
 
-/// One line of frames.jsonl from a snapshot (host_sim/view/README.md, "frames.jsonl"): time_s,
-/// scope_mm, colon_mm (displaced), contacts (position_mm, force_N, normal_force_N), estimated.
-std::string frame_line(const Json& snap) {
-    Json f;
-    f["time_s"] = snap["time_s"];
-    Json scope = Json::array(), colon = Json::array(), contacts = Json::array();
-    for (const Json& p : snap["scope_mm"])
-        scope.push_back(tenths(p));
-    for (const Json& p : snap["colon_mm"])
-        colon.push_back(tenths(p));
-    for (const Json& c : snap["contacts"])
-        contacts.push_back({{"position_mm", tenths(c["position_mm"])},
-                            {"force_N", tenths(c["force_N"])},
-                            {"normal_force_N", tenth(c["normal_force_N"].get<double>())}});
-    f["scope_mm"] = scope;
-    f["colon_mm"] = colon;
-    f["contacts"] = contacts;
-    return f.dump();
+/// One line of frames.jsonl, written as text (the view's shapes at every frame: a JSON object
+/// built and dumped would cost the run several per cent; host_sim/view/README.md, "frames.jsonl"):
+/// time_s, scope_mm (the inserted nodes), colon_mm (displaced), contacts (position_mm, force_N,
+/// normal_force_N).
+std::string frame_text(const model::World& world) {
+    std::string out;
+    out.reserve(16384);
+    char time[32];
+    std::snprintf(time, sizeof time, "%.6g", world.time_s());
+    out += "{\"time_s\":";
+    out += time;
+    out += ",\"scope_mm\":[";
+    const double depth = world.insertion_depth_mm();
+    bool first = true;
+    for (std::size_t k = 0; k < world.scope_node_count(); ++k) {
+        if (world.arc_from_tip_mm(k) > depth + 1e-9) continue;
+        if (!first) out += ',';
+        first = false;
+        append_point(out, world.node_position_mm(k));
+    }
+    out += "],\"colon_mm\":[";
+    first = true;
+    for (const Eigen::Vector3d& p : world.colon_positions_mm()) {
+        if (!first) out += ',';
+        first = false;
+        append_point(out, p);
+    }
+    out += "],\"contacts\":[";
+    first = true;
+    for (const model::WorldContact& c : world.contacts()) {
+        if (!(c.normal_force_N > 0.0)) continue;
+        if (!first) out += ',';
+        first = false;
+        out += "{\"position_mm\":";
+        append_point(out, c.scope_point_mm);
+        out += ",\"force_N\":";
+        append_point(out, c.force_N);
+        out += ",\"normal_force_N\":";
+        append_tenth(out, c.normal_force_N);
+        out += '}';
+    }
+    out += "]}";
+    return out;
+}
+
+double q16(fixed_point::Q16_16 v) {
+    return static_cast<double>(v.raw()) / 65536.0;
+}
+
+/// The live view's row at a world step: the handle (true), the truth's tip and largest station
+/// force, the box's last period (host_sim/view/README.md, "Live").
+Json view_row(const WorldReadout& world, const model::truth::TruthReadout& truth,
+              const kinetics::Outputs& box) {
+    Json stations = Json::array();
+    for (std::size_t k = 0; k < box.active_stations && k < box.stations.size(); ++k)
+        stations.push_back(Json::array(
+            {q16(box.stations[k].path_position_mm), q16(box.stations[k].normal_force_N)}));
+    return {{"time_s", world.time_s},
+            {"handle_force_N", world.handle_force_N},
+            {"handle_torque_Nmm", world.handle_torque_Nmm},
+            {"insertion_mm", world.insertion_mm},
+            {"true_tip_path_mm", truth.tip_path_mm},
+            {"true_max_force_N", truth.max_station_force_N},
+            {"box_tip_path_mm", q16(box.tip_path_mm)},
+            {"box_tip_sd_mm", q16(box.tip_uncertainty_mm)},
+            {"box_max_force_N", q16(box.max_contact_force_N)},
+            {"self_lock", box.self_lock_alarm ? 1 : 0},
+            {"contact_level", static_cast<int>(box.contact_force_level)},
+            {"fault_flags", box.fault_flags},
+            {"stations", stations}};
 }
 
 }  // namespace
@@ -139,7 +199,8 @@ LiveResult run_live(const model::Scenario& scenario,
     });
 
     Json snapshots = Json::array();
-    auto snapshot_now = [&](const std::string& label) {
+    auto take_snapshot = [&](const std::string& label, bool last = false) {
+        if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
         Json snap = reader.snapshot(*world, label);
         Json estimated = Json::array();  // the box's stations in the last period
         const kinetics::Outputs& o = firmware.box().outputs();
@@ -152,20 +213,15 @@ LiveResult run_live(const model::Scenario& scenario,
                  {"tangential_N", static_cast<double>(st.tangential_force_N.raw()) / 65536.0}});
         }
         snap["estimated"] = estimated;
-        return snap;
-    };
-    auto take_snapshot = [&](const std::string& label, bool last = false) {
-        if (!last && snapshots.size() >= kMaxSnapshots - 1) return;  // room for the last one
-        snapshots.push_back(snapshot_now(label));
+        snapshots.push_back(snap);
     };
 
-    // A frame for the view: the snapshot's shapes and contacts, coordinates to 0.1 mm (the
-    // view's scale; a tenth of the file), and the box's stations as the snapshots carry them.
+    // A frame for the view (frames.jsonl): the shapes and the contacts, to 0.1 mm.
     double next_frame_s = -1.0;
     auto write_frame = [&](double time_s) {
         if (streams.frames == nullptr || time_s + 1e-9 < next_frame_s) return;
         next_frame_s = time_s + streams.frames_period_s;
-        *streams.frames << frame_line(snapshot_now("")) << '\n';
+        *streams.frames << frame_text(*world) << '\n';
     };
 
     WorldReadout previous = reader.read(*world);
@@ -184,7 +240,8 @@ LiveResult run_live(const model::Scenario& scenario,
     model::SimulationCallbacks callbacks;
     callbacks.on_step = [&](const model::World& w, const model::WorldStepReport&) {
         latest = reader.read(w);
-        truth.add(truth_sample(truth_reader.read(w)));
+        const model::truth::TruthReadout truth_now = truth_reader.read(w);
+        truth.add(truth_sample(truth_now));
         const std::int64_t now_us = to_us(w.time_s());
         const double span_us = static_cast<double>(now_us - to_us(previous.time_s));
         for (std::int64_t t = last_tick_us + sensors::kTickUs; t <= now_us; t += sensors::kTickUs) {
@@ -219,6 +276,10 @@ LiveResult run_live(const model::Scenario& scenario,
             }
         previous = latest;
         write_frame(w.time_s());
+        if (streams.view_step)
+            streams.view_step(
+                {w.time_s(), [&] { return view_row(latest, truth_now, firmware.box().outputs()); },
+                 [&] { return frame_text(w); }});
         if (snapshot_wanted) {
             take_snapshot(snapshot_label);
             snapshot_wanted = false;

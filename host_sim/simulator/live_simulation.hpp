@@ -19,6 +19,15 @@
 
 namespace scopekin::host_sim {
 
+/// One world step as the live view takes it (`scopekin simulate --view`, host_sim/view/README.md):
+/// the timeline's values now, and the shapes, built only if asked for.
+struct LiveViewStep {
+    double time_s = 0;
+    /// time_s, handle, insertion, true and box tip, forces, alarms (built only if asked for)
+    std::function<nlohmann::ordered_json()> row;
+    std::function<std::string()> frame;  ///< a frames.jsonl line (JSON text)
+};
+
 struct LiveStreams {
     std::ostream* recording = nullptr;  ///< recording.csv (sensor rows)
     std::ostream* world = nullptr;      ///< world.csv (true state at the output rate)
@@ -33,6 +42,8 @@ struct LiveStreams {
     /// frames_period_s), optional
     std::ostream* frames = nullptr;
     double frames_period_s = 0.1;
+    /// Called after every world step (the live view), optional.
+    std::function<void(const LiveViewStep&)> view_step;
 };
 
 /// Advance efficiency of the true tip per region: tip advance / handle advance while the hand

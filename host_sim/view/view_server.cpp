@@ -1,54 +1,176 @@
 #include "host_sim/view/view_server.hpp"
 
+#include <fcntl.h>
 #include <pthread.h>
+#include <spawn.h>
+#include <sys/wait.h>
 
-#include <atomic>
+#include <chrono>
 #include <csignal>
-#include <thread>
+#include <cstdio>
+#include <cstdlib>
 
 #include <httplib.h>
 
+extern char** environ;
+
 namespace scopekin::view {
+namespace {
 
-void serve_page(const std::string& page, const ServeOptions& options) {
-    // SIGINT and SIGTERM are taken by one thread that stops the server (blocked here before the
-    // server's threads start, so that they inherit the mask).
-    sigset_t stop_signals;
-    sigemptyset(&stop_signals);
-    sigaddset(&stop_signals, SIGINT);
-    sigaddset(&stop_signals, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+sigset_t stop_signals() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    return set;
+}
 
-    httplib::Server server;
-    server.Get("/", [&page](const httplib::Request&, httplib::Response& res) {
-        res.set_content(page, "text/html; charset=utf-8");
+/// An idle event stream sends a comment this often (a closed tab is noticed by the failed write).
+constexpr std::chrono::seconds kKeepAlive{1};
+
+}  // namespace
+
+PageServer::PageServer(std::string page)
+    : server_(std::make_unique<httplib::Server>()), page_(std::move(page)) {
+    const sigset_t set = stop_signals();
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    server_->Get("/", [this](const httplib::Request&, httplib::Response& res) {
+        const std::lock_guard lock(mutex_);
+        res.set_content(page_, "text/html; charset=utf-8");
     });
-    server.Get("/health", [](const httplib::Request&, httplib::Response& res) {
+    server_->Get("/health", [](const httplib::Request&, httplib::Response& res) {
         res.set_content("ok", "text/plain");
     });
+    server_->Get("/events", [this](const httplib::Request&, httplib::Response& res) {
+        auto next = std::make_shared<std::size_t>(0);
+        res.set_header("Cache-Control", "no-cache");
+        res.set_chunked_content_provider(
+            "text/event-stream", [this, next](std::size_t, httplib::DataSink& sink) {
+                std::unique_lock lock(mutex_);
+                changed_.wait_for(lock, kKeepAlive, [&] {
+                    return *next < events_.size() || events_ended_ || stopping_;
+                });
+                std::string chunk;
+                while (*next < events_.size())
+                    chunk += "data: " + events_[(*next)++] + "\n\n";
+                const bool end = events_ended_ || stopping_;
+                lock.unlock();
+                if (chunk.empty()) chunk = ": keep-alive\n\n";
+                if (!sink.write(chunk.data(), chunk.size())) return false;
+                if (end) sink.done();
+                return true;
+            });
+    });
+}
+
+PageServer::~PageServer() {
+    {
+        const std::lock_guard lock(mutex_);
+        stopping_ = true;
+    }
+    changed_.notify_all();
+    server_->stop();
+    if (listener_.joinable()) listener_.join();
+    if (signals_.joinable()) {
+        bool waiting = false;
+        {
+            const std::lock_guard lock(mutex_);
+            waiting = !signals_done_;
+        }
+        if (waiting) pthread_kill(signals_.native_handle(), SIGTERM);  // wakes its sigwait
+        signals_.join();
+    }
+}
+
+void PageServer::set_page(std::string page) {
+    const std::lock_guard lock(mutex_);
+    page_ = std::move(page);
+}
+
+void PageServer::publish(std::string message) {
+    {
+        const std::lock_guard lock(mutex_);
+        events_.push_back(std::move(message));
+    }
+    changed_.notify_all();
+}
+
+void PageServer::end_events() {
+    {
+        const std::lock_guard lock(mutex_);
+        events_ended_ = true;
+    }
+    changed_.notify_all();
+}
+
+std::size_t PageServer::published() const {
+    const std::lock_guard lock(mutex_);
+    return events_.size();
+}
+
+std::string PageServer::bind(std::uint16_t port) {
     const char* host = "127.0.0.1";
-    int port = options.port;
+    int bound = port;
     if (port == 0) {
-        port = server.bind_to_any_port(host);
-        if (port < 0) throw ViewServerError("no free port on 127.0.0.1");
-    } else if (!server.bind_to_port(host, port)) {
+        bound = server_->bind_to_any_port(host);
+        if (bound < 0) throw ViewServerError("no free port on 127.0.0.1");
+    } else if (!server_->bind_to_port(host, port)) {
         throw ViewServerError("port " + std::to_string(port) +
                               " on 127.0.0.1 cannot be used (in use by another program?); choose "
                               "another with --port, or --port 0 for any free one");
     }
-    std::atomic<bool> stopping{false};
-    std::thread stopper([&server, &stopping, stop_signals] {
+    return "http://" + std::string(host) + ":" + std::to_string(bound) + "/";
+}
+
+void PageServer::start() {
+    listener_ = std::thread([this] { server_->listen_after_bind(); });
+    signals_ = std::thread([this] {
+        const sigset_t set = stop_signals();
         int signal = 0;
-        sigwait(&stop_signals, &signal);
-        stopping = true;
-        server.stop();
+        sigwait(&set, &signal);
+        std::unique_lock lock(mutex_);
+        signals_done_ = true;
+        if (stopping_) return;                          // the destructor's wake-up
+        if (!graceful_stop_) std::_Exit(128 + signal);  // a live run interrupted, as without us
+        signalled_ = true;
+        stopping_ = true;
+        lock.unlock();
+        changed_.notify_all();
+        server_->stop();
     });
-    if (options.on_listening)
-        options.on_listening("http://" + std::string(host) + ":" + std::to_string(port) + "/");
-    server.listen_after_bind();
-    // The server ended without a signal (its socket failed): wake the stopper to end it.
-    if (!stopping) pthread_kill(stopper.native_handle(), SIGTERM);
-    stopper.join();
+}
+
+void PageServer::wait_for_stop_signal() {
+    std::unique_lock lock(mutex_);
+    graceful_stop_ = true;
+    changed_.wait(lock, [&] { return signalled_; });
+}
+
+/// Asks the desktop to open `url` (xdg-open); says so if it cannot.
+void open_in_browser(const std::string& url) {
+    std::string program = "xdg-open";
+    std::string argument = url;
+    char* argv[] = {program.data(), argument.data(), nullptr};
+    posix_spawn_file_actions_t quiet;
+    posix_spawn_file_actions_init(&quiet);
+    posix_spawn_file_actions_addopen(&quiet, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&quiet, 2, "/dev/null", O_WRONLY, 0);
+    // The browser must not inherit the server's blocked SIGINT and SIGTERM.
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    sigset_t none;
+    sigemptyset(&none);
+    posix_spawnattr_setsigmask(&attributes, &none);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK);
+    pid_t pid = 0;
+    const int failed = posix_spawnp(&pid, program.c_str(), &quiet, &attributes, argv, environ);
+    posix_spawnattr_destroy(&attributes);
+    posix_spawn_file_actions_destroy(&quiet);
+    int status = 0;
+    if (failed != 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) ||
+        WEXITSTATUS(status) != 0)
+        std::printf("(no browser could be opened here: open the address above in one)\n");
+    std::fflush(stdout);
 }
 
 }  // namespace scopekin::view

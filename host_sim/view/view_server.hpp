@@ -1,9 +1,20 @@
 #pragma once
-// Serves one page on 127.0.0.1 (cpp-httplib) until SIGINT or SIGTERM.
+// The view's web server on 127.0.0.1 (Debian's cpp-httplib): GET / the page, GET /events the live
+// run's messages as server-sent events, GET /health "ok". SIGINT and SIGTERM are taken by one
+// thread of the server's: while a live run goes on they end the program at once (exit status 130,
+// as without the view), afterwards they end wait_for_stop_signal().
+#include <condition_variable>
 #include <cstdint>
-#include <functional>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
+#include <vector>
+
+namespace httplib {
+class Server;
+}
 
 namespace scopekin::view {
 
@@ -12,14 +23,46 @@ struct ViewServerError : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
 
-struct ServeOptions {
-    std::uint16_t port = 8765;  ///< 0: any free port
-    /// Called once the port is bound, with the page's URL (print it, open a browser).
-    std::function<void(const std::string& url)> on_listening;
+class PageServer {
+public:
+    /// Blocks SIGINT and SIGTERM in the calling thread (the server's threads inherit it): create
+    /// the server before any other thread.
+    explicit PageServer(std::string page);
+    ~PageServer();
+    PageServer(const PageServer&) = delete;
+    PageServer& operator=(const PageServer&) = delete;
+
+    /// What GET / answers from now on.
+    void set_page(std::string page);
+    /// One message (a JSON text) for /events: kept, and sent to every client from the first.
+    void publish(std::string message);
+    /// No more messages: each event stream ends once it has sent them all.
+    void end_events();
+    /// Binds 127.0.0.1:port (0: any free port) and returns the page's address.
+    std::string bind(std::uint16_t port);
+    /// Serves in a background thread; a signal ends the program (exit 130) until
+    /// wait_for_stop_signal() is called.
+    void start();
+    /// Returns when SIGINT or SIGTERM arrives (then the server has stopped).
+    void wait_for_stop_signal();
+    /// How many messages have been published.
+    std::size_t published() const;
+
+private:
+    std::unique_ptr<httplib::Server> server_;
+    mutable std::mutex mutex_;
+    std::condition_variable changed_;
+    std::string page_;
+    std::vector<std::string> events_;
+    bool events_ended_ = false;
+    bool stopping_ = false;
+    bool graceful_stop_ = false;
+    bool signalled_ = false;
+    bool signals_done_ = false;
+    std::thread listener_, signals_;
 };
 
-/// GET / answers `page` (text/html), GET /health "ok". Returns when SIGINT or SIGTERM arrives.
-/// Throws ViewServerError if the port cannot be bound.
-void serve_page(const std::string& page, const ServeOptions& options);
+/// Asks the desktop to open `url` (xdg-open); prints that it could not where it cannot.
+void open_in_browser(const std::string& url);
 
 }  // namespace scopekin::view

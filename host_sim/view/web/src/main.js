@@ -5,8 +5,10 @@ import './view.css';
 import { readEmbeddedData, indexAtOrBefore, alarmsAt, nextAlarmAfter } from './run_data.js';
 import { RunScene } from './scene.js';
 import { Timeline, kAlarmStyle } from './timeline.js';
+import { connectLive } from './live.js';
 
 const kSpeeds = [0.25, 0.5, 1, 2, 5, 10];
+const kLiveChartPeriod_ms = 250;
 
 class View {
   constructor(data) {
@@ -17,11 +19,14 @@ class View {
     this.time_s = this.start_s;
     this.playing = false;
     this.speed = 1;
+    this.live = data.kind === 'live';
+    this.messagesReceived = 0;
     this.frameTimes = data.frames.map((f) => f.time_s);
     document.getElementById('title').textContent = data.title;
     document.getElementById('subtitle').textContent = data.subtitle;
     this.scene = new RunScene(document.getElementById('scene'), data);
-    this.timeline = new Timeline(document.getElementById('timeline'), this);
+    // A live page draws its charts once it has data (uPlot's axes need a range).
+    this.timeline = this.live ? null : new Timeline(document.getElementById('timeline'), this);
     this.buildControls();
     this.buildAlarmList();
     window.addEventListener('resize', () => this.resize());
@@ -36,12 +41,43 @@ class View {
         this.setTime(Math.min(next, this.duration_s));
         this.updatePlayButton();
       }
-      this.scene.render();
-      this.framesDrawn += 1;
+      this.drawCharts(now);
+      // The scene is drawn when something in it changed (a new time, the camera moved, a resize).
+      if (this.sceneDirty || this.scene.cameraMoved) {
+        this.scene.render();
+        this.sceneDirty = false;
+        this.scene.cameraMoved = false;
+        this.framesDrawn += 1;
+      }
       requestAnimationFrame(loop);
     };
     this.framesDrawn = 0;
     requestAnimationFrame(loop);
+    if (this.live) {
+      document.getElementById('banner').textContent = 'live: the run is streamed as it is simulated';
+      connectLive(this);
+    }
+  }
+
+  /// New live data: the cursor follows the run's end unless it was moved back.
+  liveUpdate(openedAlarms, ended, replay) {
+    const s = this.data.series;
+    const following = this.time_s >= this.duration_s - 0.5;
+    if (s.time_s.length) {
+      this.start_s = s.time_s[0];
+      this.duration_s = s.time_s[s.time_s.length - 1];
+    }
+    const scrub = document.getElementById('scrub');
+    scrub.min = String(this.start_s);
+    scrub.max = String(this.duration_s);
+    for (const a of openedAlarms) this.addAlarmItem(a, this.data.alarms.indexOf(a));
+    this.alarmItems.forEach((li, k) => this.labelAlarmItem(li, this.data.alarms[k]));
+    this.chartData = 'stale';
+    this.setTime(following ? this.duration_s : this.time_s);
+    if (ended)
+      document.getElementById('banner').innerHTML = replay
+        ? 'The run is complete: <a href="">reload</a> for its replay (every period\'s alarms, the whole run).'
+        : 'The live stream has ended.';
   }
 
   buildControls() {
@@ -77,19 +113,25 @@ class View {
   }
 
   buildAlarmList() {
-    const list = document.getElementById('alarms');
-    this.alarmItems = this.data.alarms.map((a, k) => {
-      const li = document.createElement('li');
-      li.dataset.index = String(k);
-      const style = kAlarmStyle[a.kind];
-      const end = a.end_s === null ? 'end' : `${a.end_s.toFixed(2)} s`;
-      li.innerHTML = `<span class="swatch" style="background:${style?.solid ?? '#888'}"></span>` +
-        `${a.start_s.toFixed(2)} s – ${end}: ${style?.label ?? a.kind}`;
-      li.addEventListener('click', () => this.setTime(a.start_s));
-      list.appendChild(li);
-      return li;
-    });
+    this.alarmItems = [];
+    this.data.alarms.forEach((a, k) => this.addAlarmItem(a, k));
+  }
+
+  addAlarmItem(a, k) {
+    const li = document.createElement('li');
+    li.dataset.index = String(k);
+    this.labelAlarmItem(li, a);
+    li.addEventListener('click', () => this.setTime(a.start_s));
+    document.getElementById('alarms').appendChild(li);
+    this.alarmItems.push(li);
     document.getElementById('alarm-count').textContent = String(this.data.alarms.length);
+  }
+
+  labelAlarmItem(li, a) {
+    const style = kAlarmStyle[a.kind];
+    const end = a.end_s === null ? (this.live ? 'now' : 'end') : `${a.end_s.toFixed(2)} s`;
+    li.innerHTML = `<span class="swatch" style="background:${style?.solid ?? '#888'}"></span>` +
+      `${a.start_s.toFixed(2)} s – ${end}: ${style?.label ?? a.kind}`;
   }
 
   jumpToNextAlarm() {
@@ -122,12 +164,31 @@ class View {
       `tip: box ${f(s.box_tip_path_mm[row], 0)} ± ${f(s.box_tip_sd_mm[row], 0)} mm, true ${f(s.true_tip_path_mm[row], 0)} mm · ` +
       `largest force: box ${f(s.box_max_force_N[row])} N, true ${f(s.true_max_force_N[row])} N`;
     document.getElementById('scrub').value = String(this.time_s);
-    this.timeline.redraw();
+    this.sceneDirty = true;
+    if (this.chartData !== 'stale') this.chartData = 'cursor';
+  }
+
+  /// The charts, from the animation loop: the cursor at every drawn frame; a live run's new data
+  /// at most every kLiveChartPeriod_ms (uPlot redraws the whole run each time).
+  drawCharts(now) {
+    if (this.chartData === 'stale') {
+      if (now - (this.lastChartData ?? -1e9) < kLiveChartPeriod_ms) return;
+      this.lastChartData = now;
+      if (this.timeline) this.timeline.refresh();
+      else if (this.data.series.time_s.length >= 2) {
+        this.timeline = new Timeline(document.getElementById('timeline'), this);
+        this.timeline.moveCursor();
+      }
+    } else if (this.chartData === 'cursor' && this.timeline) {
+      this.timeline.moveCursor();
+    }
+    this.chartData = 'drawn';
   }
 
   resize() {
     this.scene.resize(document.getElementById('scene'));
-    this.timeline.resize(document.getElementById('timeline').clientWidth);
+    this.sceneDirty = true;
+    if (this.timeline) this.timeline.resize(document.getElementById('timeline').clientWidth);
   }
 
   /// What the browser test reads (host_sim/view/web/test/view_test.mjs).
@@ -137,6 +198,8 @@ class View {
       frame_index: this.scene.frameIndex,
       frames: this.data.frames.length,
       frames_drawn: this.framesDrawn,
+      live: this.live,
+      messages: this.messagesReceived,
       active_alarms: [...document.querySelectorAll('#alarms li.active')].map((li) => Number(li.dataset.index)),
       alarms: this.data.alarms,
     };

@@ -104,13 +104,16 @@ export class RunScene {
   constructor(container, data) {
     this.data = data;
     this.restArcs = arcLengths(data.colon.centerline_mm);
-    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    // No multisampling: software WebGL (a machine without a GPU) draws several times faster.
+    this.renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(window.devicePixelRatio || 1);
     this.renderer.setClearColor(0x101418);
     container.appendChild(this.renderer.domElement);
     this.scene = new THREE.Scene();
     this.camera = new THREE.PerspectiveCamera(40, 1, 1, 20000);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    this.cameraMoved = true;
+    this.controls.addEventListener('change', () => { this.cameraMoved = true; });
     this.scene.add(new THREE.AmbientLight(0xffffff, 0.6));
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
     sun.position.set(300, 800, 900);
@@ -130,7 +133,7 @@ export class RunScene {
     this.colon.update(colon.centerline_mm);
     this.scene.add(this.colon.mesh);
 
-    const maxScopePoints = Math.max(2, ...data.frames.map((f) => f.scope_mm.length));
+    const maxScopePoints = data.scope_max_points ?? Math.max(2, ...data.frames.map((f) => f.scope_mm.length));
     this.scope = new RingTube(
       maxScopePoints,
       [kScopeRadius_mm],

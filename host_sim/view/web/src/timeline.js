@@ -51,18 +51,15 @@ function bandsPlugin(view) {
             const x1 = u.valToPos(f.end_s ?? view.duration_s, 'x', true);
             ctx.fillRect(x0, top + height - 4 * devicePixelRatio, Math.max(x1 - x0, 2), 4 * devicePixelRatio);
           }
-          const x = u.valToPos(view.time_s, 'x', true);
-          ctx.strokeStyle = '#ffffff';
-          ctx.lineWidth = 2 * devicePixelRatio;
-          ctx.beginPath();
-          ctx.moveTo(x, top);
-          ctx.lineTo(x, top + height);
-          ctx.stroke();
           ctx.restore();
         },
       ],
       ready: [
         (u) => {
+          // The time cursor: a line over the chart, moved without redrawing the chart.
+          const line = document.createElement('div');
+          line.className = 'time-cursor';
+          u.over.appendChild(line);
           const scrub = (e) => {
             const rect = u.over.getBoundingClientRect();
             view.setTime(u.posToVal(e.clientX - rect.left, 'x'));
@@ -88,7 +85,6 @@ export class Timeline {
   constructor(container, view) {
     this.view = view;
     this.charts = [];
-    const s = view.data.series;
     const width = Math.max((container.clientWidth || 900) - 24, 300);
     const common = (title, height) => ({
       title,
@@ -99,9 +95,7 @@ export class Timeline {
       plugins: [bandsPlugin(view)],
       scales: { x: { time: false } },
     });
-    const nulls = (a) => a.map((v) => (v === null || v === undefined ? null : v));
-    const minus = s.box_tip_path_mm.map((v, k) => (v === null || s.box_tip_sd_mm[k] === null ? null : v - s.box_tip_sd_mm[k]));
-    const plus = s.box_tip_path_mm.map((v, k) => (v === null || s.box_tip_sd_mm[k] === null ? null : v + s.box_tip_sd_mm[k]));
+    const columns = this.columns();
 
     this.charts.push(new uPlot({
       ...common('Handle: what the box measures', 150),
@@ -111,7 +105,7 @@ export class Timeline {
         { label: 'torque [N·mm]', stroke: '#56b4e9', width: 1, scale: 'Nmm' },
       ],
       axes: [axisStyle({}), axisStyle({ scale: 'N', label: 'N' }), axisStyle({ scale: 'Nmm', side: 1, label: 'N·mm', grid: { show: false } })],
-    }, [s.time_s, nulls(s.handle_force_N), nulls(s.handle_torque_Nmm)], container));
+    }, columns[0], container));
 
     this.charts.push(new uPlot({
       ...common('Tip along the colon: the box (±1 SD) and the truth', 170),
@@ -125,7 +119,7 @@ export class Timeline {
       ],
       bands: [{ series: [5, 4], fill: 'rgba(0,188,212,0.15)' }],
       axes: [axisStyle({}), axisStyle({ label: 'mm' }), rightSpacer()],
-    }, [s.time_s, nulls(s.insertion_mm), nulls(s.true_tip_path_mm), nulls(s.box_tip_path_mm), minus, plus], container));
+    }, columns[1], container));
 
     this.charts.push(new uPlot({
       ...common('Largest contact force: the box and the truth', 150),
@@ -135,14 +129,39 @@ export class Timeline {
         { label: 'box [N]', stroke: '#00bcd4', width: 1.5 },
       ],
       axes: [axisStyle({ label: 't [s]' }), axisStyle({ label: 'N' }), rightSpacer()],
-    }, [s.time_s, nulls(s.true_max_force_N), nulls(s.box_max_force_N)], container));
+    }, columns[2], container));
   }
 
-  redraw() {
-    for (const c of this.charts) c.redraw(false, false);
+  /// Each chart's data from the view's series (null where a period lacks a value).
+  columns() {
+    const s = this.view.data.series;
+    const nulls = (a) => a.map((v) => (v === undefined ? null : v));
+    const minus = s.box_tip_path_mm.map((v, k) => (v === null || s.box_tip_sd_mm[k] === null ? null : v - s.box_tip_sd_mm[k]));
+    const plus = s.box_tip_path_mm.map((v, k) => (v === null || s.box_tip_sd_mm[k] === null ? null : v + s.box_tip_sd_mm[k]));
+    return [
+      [s.time_s, nulls(s.handle_force_N), nulls(s.handle_torque_Nmm)],
+      [s.time_s, nulls(s.insertion_mm), nulls(s.true_tip_path_mm), nulls(s.box_tip_path_mm), minus, plus],
+      [s.time_s, nulls(s.true_max_force_N), nulls(s.box_max_force_N)],
+    ];
+  }
+
+  /// New data (a live run's rows): every chart redrawn over the whole run so far.
+  refresh() {
+    const columns = this.columns();
+    this.charts.forEach((c, k) => c.setData(columns[k]));
+    this.moveCursor();
+  }
+
+  /// Moves the time cursor of every chart to the view's time.
+  moveCursor() {
+    for (const c of this.charts) {
+      const line = c.over.querySelector('.time-cursor');
+      if (line) line.style.left = `${c.valToPos(this.view.time_s, 'x')}px`;
+    }
   }
 
   resize(width) {
     for (const c of this.charts) c.setSize({ width: Math.max(width - 24, 300), height: c.height });
+    this.moveCursor();
   }
 }

@@ -1,0 +1,69 @@
+#include "host_sim/view/live_view.hpp"
+
+#include "host_sim/evaluate/estimators.hpp"
+#include "host_sim/simulator/world_readout.hpp"
+#include "host_sim/view/view_page.hpp"
+
+namespace scopekin::view {
+
+using Json = nlohmann::json;
+using OrderedJson = nlohmann::ordered_json;
+
+Json live_page_data(const model::Scenario& scenario, const std::string& title) {
+    Json data;
+    data["schema"] = "scopekin-view/1";
+    data["kind"] = "live";
+    data["title"] = title;
+    data["subtitle"] = scenario.description + " · live";
+    data["colon"] = Json::parse(host_sim::WorldReader::colon_json(*scenario.colon).dump());
+    data["scope_max_points"] = scenario.scope.elements + 1;
+    data["frames"] = Json::array();
+    data["frames_source"] = "live";
+    Json series;
+    for (const char* name :
+         {"time_s", "handle_force_N", "handle_torque_Nmm", "insertion_mm", "true_tip_path_mm",
+          "box_tip_path_mm", "box_tip_sd_mm", "true_max_force_N", "box_max_force_N",
+          "station_path_mm", "station_normal_N"})
+        series[name] = Json::array();
+    series["stride_periods"] = 1;
+    data["series"] = series;
+    data["alarms"] = Json::array();
+    data["faults"] = Json::array();
+    data["fault_names"] = evaluate::fault_flag_names();
+    data["truth_episodes"] = {
+        {"loop", Json::array()}, {"warning_10N", Json::array()}, {"critical_14N", Json::array()}};
+    return data;
+}
+
+LiveView::LiveView(const model::Scenario& scenario, const std::string& title, std::uint16_t port)
+    : server_(render_view_page(live_page_data(scenario, title), view_assets_folder())) {
+    url_ = server_.bind(port);
+    server_.start();
+}
+
+void LiveView::step(const host_sim::LiveViewStep& step) {
+    if (step.time_s >= last_row_s_ + kLiveRowPeriod_s - 1e-9) {
+        rows_.push_back(step.row());
+        last_row_s_ = step.time_s;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_send_ < std::chrono::duration<double>(1.0 / kLiveMessagesPerSecond)) return;
+    last_send_ = now;
+    send(step.frame());
+}
+
+void LiveView::send(const std::string& frame) {
+    std::string message = "{\"rows\":" + rows_.dump();
+    if (!frame.empty()) message += ",\"frame\":" + frame;
+    server_.publish(message + "}");
+    rows_ = OrderedJson::array();
+}
+
+void LiveView::finish(const std::string& replay_page) {
+    if (!rows_.empty()) send(std::string());
+    if (!replay_page.empty()) server_.set_page(replay_page);
+    server_.publish(OrderedJson{{"done", true}, {"replay", !replay_page.empty()}}.dump());
+    server_.end_events();
+}
+
+}  // namespace scopekin::view
