@@ -27,11 +27,26 @@ int run_view(const ViewOptions& o) {
     std::string page;
     try {
         std::cerr << "scopekin view: reading " << o.folder << " ..." << std::endl;
-        const nlohmann::json data = view::read_run_view(o.folder);
-        std::cerr << "scopekin view: " << data["series"]["time_s"].size() << " timeline points, "
-                  << data["alarms"].size() << " alarms, " << data["frames"].size()
-                  << " shapes (from " << data["frames_source"].get<std::string>() << ")"
-                  << std::endl;
+        nlohmann::json data;
+        if (view::is_evaluation_folder(o.folder)) {
+            data = view::read_evaluation_view(
+                o.folder, [](std::size_t k, std::size_t n, const std::string& name) {
+                    std::cerr << "scopekin view: case " << k + 1 << " of " << n << ": " << name
+                              << std::endl;
+                });
+            for (const auto& [name, why] : data["case_errors"].items())
+                std::cerr << "scopekin view: warning: case " << name
+                          << " has no replay: " << why.get<std::string>() << "\n";
+            std::cerr << "scopekin view: the scorecard of " << data["scorecard"]["cases"].size()
+                      << " cases, " << data["case_views"].size() << " with their replay"
+                      << std::endl;
+        } else {
+            data = view::read_run_view(o.folder);
+            std::cerr << "scopekin view: " << data["series"]["time_s"].size()
+                      << " timeline points, " << data["alarms"].size() << " alarms, "
+                      << data["frames"].size() << " shapes (from "
+                      << data["frames_source"].get<std::string>() << ")" << std::endl;
+        }
         page = view::render_view_page(data, view::view_assets_folder());
     } catch (const view::ViewDataError& e) {
         std::cerr << "scopekin view: " << e.what() << "\n";
@@ -50,7 +65,7 @@ int run_view(const ViewOptions& o) {
             return 3;
         }
         std::printf(
-            "wrote %s (%.1f MB): one file with the run in it; it opens from disk in a "
+            "wrote %s (%.1f MB): one file with the data in it; it opens from disk in a "
             "browser, without a server\n",
             o.export_file.c_str(), static_cast<double>(page.size()) / 1e6);
         return 0;
@@ -83,7 +98,9 @@ void add_view_command(CLI::App& app) {
         "the alarms as bands, the truth's episodes and the fault flags as strips) with play, "
         "speed, scrub and next alarm. DIR is a folder of `scopekin simulate` (with --frames for "
         "the shapes over time; without, the snapshots' key moments), `scopekin demo` or one case "
-        "of `scopekin evaluate`. Serves the page on 127.0.0.1 and prints its address until "
+        "of `scopekin evaluate`; or a whole evaluation's folder: its scorecard (every estimator "
+        "beside the baselines) and its cases, each a link to its replay. Serves the page on "
+        "127.0.0.1 and prints its address until "
         "Ctrl-C, or writes it as one self-contained file with --export. Exit status 0 done, 2 "
         "no run in DIR, a malformed or truncated file, the port in use, or the page's scripts "
         "not built, 3 the exported file cannot be written.");

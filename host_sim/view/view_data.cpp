@@ -87,11 +87,10 @@ std::size_t station_count(const fs::path& firmware_csv) {
     return k;
 }
 
-/// One row of every k-th period, the series the timeline draws.
-Json series_json(const evaluate::CaseRun& run, const fs::path& folder) {
+/// One row of every k-th period (at most max_points rows), the series the timeline draws.
+Json series_json(const evaluate::CaseRun& run, const fs::path& folder, std::size_t max_points) {
     const std::size_t n = run.time_s.size();
-    const std::size_t stride =
-        std::max<std::size_t>(1, (n + kMaxSeriesPoints - 1) / kMaxSeriesPoints);
+    const std::size_t stride = std::max<std::size_t>(1, (n + max_points - 1) / max_points);
     const fs::path fw = folder / "firmware.csv";
     const std::size_t stations = station_count(fw);
     std::vector<std::string> names;
@@ -182,7 +181,7 @@ Json frames_from_jsonl(const fs::path& file) {
 
 }  // namespace
 
-Json read_run_view(const fs::path& folder) {
+Json read_run_view(const fs::path& folder, std::size_t max_series_points) {
     if (!fs::is_directory(folder)) throw ViewDataError(folder.string() + ": not a folder");
     if (!fs::is_regular_file(folder / "summary.json"))
         throw ViewDataError(folder.string() +
@@ -246,12 +245,59 @@ Json read_run_view(const fs::path& folder) {
         data["frames"] = frames;
         data["frames_source"] = "snapshots.json";
     }
-    data["series"] = series_json(run, folder);
+    data["series"] = series_json(run, folder, std::max<std::size_t>(max_series_points, 2));
     data["alarms"] = alarms_json(run);
     data["faults"] = faults_json(run);
     data["truth_episodes"] = {{"loop", episodes_json(run.loop_episodes)},
                               {"warning_10N", episodes_json(run.warning_episodes)},
                               {"critical_14N", episodes_json(run.critical_episodes)}};
+    return data;
+}
+
+bool is_evaluation_folder(const fs::path& folder) {
+    return fs::is_regular_file(folder / "scorecard.json") && fs::is_directory(folder / "cases");
+}
+
+Json read_evaluation_view(
+    const fs::path& folder,
+    const std::function<void(std::size_t, std::size_t, const std::string&)>& progress) {
+    const fs::path file = folder / "scorecard.json";
+    Json scorecard;
+    try {
+        scorecard = model::io::parse_json_file(file.string());
+    } catch (const std::exception& e) {
+        throw ViewDataError(e.what());
+    }
+    if (!scorecard.is_object() || !scorecard.contains("cases") || !scorecard["cases"].is_array() ||
+        !scorecard.contains("overall"))
+        throw ViewDataError(file.string() +
+                            ": not a scorecard (no \"cases\" list or no \"overall\")");
+    Json data;
+    data["schema"] = "scopekin-view/1";
+    data["kind"] = "evaluation";
+    data["title"] = "evaluation " + scorecard.value("manifest", std::string("?"));
+    data["subtitle"] = scorecard.value("description", std::string());
+    data["scorecard"] = scorecard;
+    Json views = Json::object(), errors = Json::object();
+    const Json& cases = scorecard["cases"];
+    for (std::size_t k = 0; k < cases.size(); ++k) {
+        const std::string name = cases[k].value("case", std::string());
+        const std::string sub = cases[k].value("folder", "cases/" + name);
+        if (progress) progress(k, cases.size(), name);
+        if (cases[k].value("status", std::string()) != "complete") {
+            errors[name] = "the run did not complete: " + cases[k].value("message", std::string());
+            continue;
+        }
+        try {
+            Json view = read_run_view(folder / sub, kEvaluationCaseSeriesPoints);
+            view["title"] = name;
+            views[name] = view;
+        } catch (const ViewDataError& e) {
+            errors[name] = e.what();
+        }
+    }
+    data["case_views"] = views;
+    data["case_errors"] = errors;
     return data;
 }
 

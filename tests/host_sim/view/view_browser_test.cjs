@@ -9,7 +9,7 @@
 const { spawn, spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const puppeteer = require('puppeteer-core');
+const { checks, launchChromium } = require('./browser_support.cjs');
 
 const [scopekin, runDir, outDir, chromium] = process.argv.slice(2);
 if (!scopekin || !runDir || !outDir || !chromium) {
@@ -17,11 +17,7 @@ if (!scopekin || !runDir || !outDir || !chromium) {
   process.exit(2);
 }
 fs.mkdirSync(outDir, { recursive: true });
-let failures = 0;
-function expect(condition, message) {
-  console.log(`${condition ? 'ok  ' : 'FAIL'} ${message}`);
-  if (!condition) failures += 1;
-}
+const { expect, finish } = checks();
 
 /// Starts `scopekin view RUN --no-browser --port 0` and resolves with its URL and process.
 function serve() {
@@ -122,11 +118,7 @@ async function checkPage(browser, url, name) {
   const exp = spawnSync(scopekin, ['view', runDir, '--export', exported], { encoding: 'utf8' });
   expect(exp.status === 0 && fs.existsSync(exported), `scopekin view --export wrote ${exported} (exit ${exp.status}) ${exp.stderr.trim()}`);
   const server = await serve();
-  const browser = await puppeteer.launch({
-    executablePath: chromium,
-    headless: true,
-    args: ['--no-sandbox', '--disable-dev-shm-usage', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  });
+  const browser = await launchChromium(chromium);
   try {
     await checkPage(browser, server.url, 'served');
     await checkPage(browser, `file://${path.resolve(exported)}`, 'exported');
@@ -136,8 +128,7 @@ async function checkPage(browser, url, name) {
   }
   const code = await new Promise((r) => (server.child.exitCode !== null ? r(server.child.exitCode) : server.child.on('exit', (c) => r(c))));
   expect(code === 0, `scopekin view ends with exit status 0 on SIGTERM (${code})`);
-  console.log(failures === 0 ? 'all checks passed' : `${failures} check(s) failed`);
-  process.exit(failures === 0 ? 0 : 1);
+  finish();
 })().catch((e) => {
   console.error(`FAIL ${e.stack || e}`);
   process.exit(1);

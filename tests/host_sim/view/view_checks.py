@@ -10,6 +10,8 @@ view_checks.py CHECK SCOPEKIN RUN_DIR WORK
   port_in_use a port another program holds: exit 2, the message names the port
   unwritable  --export into a folder that does not exist: exit 3
   help        --help lists --port, --no-browser and --export
+  evaluation  (RUN_DIR an evaluation) the page embeds the scorecard and each case's replay; a case
+              whose files are gone is listed without one, with a warning, exit 0
 Exit status 0 passed, 1 a check failed.
 """
 import csv
@@ -165,6 +167,29 @@ def check_help():
     p = subprocess.run([SCOPEKIN, "view", "--help"], capture_output=True, text=True)
     expect(p.returncode == 0 and all(o in p.stdout for o in ["--port", "--no-browser", "--export"]),
            "--help lists --port, --no-browser and --export")
+
+
+def check_evaluation():
+    out = os.path.join(fresh("evaluation"), "view.html")
+    p = view(RUN, "--export", out)
+    expect(p.returncode == 0, f"--export of an evaluation exits 0 ({p.returncode}): {p.stderr.strip()[-300:]}")
+    data = embedded_data(out)
+    scorecard = json.load(open(os.path.join(RUN, "scorecard.json")))
+    complete = [c["case"] for c in scorecard["cases"] if c["status"] == "complete"]
+    expect(data["kind"] == "evaluation" and data["scorecard"]["overall"] == scorecard["overall"],
+           "the page embeds the scorecard as scorecard.json has it")
+    expect(sorted(data["case_views"]) == sorted(complete), f"each complete case has its replay ({len(data['case_views'])} of {len(complete)})")
+    expect(all(len(v["series"]["time_s"]) <= 2000 for v in data["case_views"].values()),
+           "each case's timeline keeps at most 2000 points")
+    d = os.path.join(WORK, "evaluation_broken")
+    shutil.rmtree(d, ignore_errors=True)
+    shutil.copytree(RUN, d)
+    broken = scorecard["cases"][0]
+    os.remove(os.path.join(d, broken["folder"], "truth.csv"))
+    p = view(d, "--export", os.path.join(d, "view.html"))
+    data = embedded_data(os.path.join(d, "view.html"))
+    expect(p.returncode == 0 and broken["case"] in p.stderr and "truth.csv" in data["case_errors"].get(broken["case"], ""),
+           f"a case without truth.csv: listed without its replay, a warning, exit 0 ({p.returncode}): {data['case_errors']}")
 
 
 os.makedirs(WORK, exist_ok=True)

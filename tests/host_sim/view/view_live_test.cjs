@@ -9,7 +9,7 @@
 const { spawn } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const puppeteer = require('puppeteer-core');
+const { checks, launchChromium } = require('./browser_support.cjs');
 
 const [scopekin, scenario, runDir, outDir, chromium] = process.argv.slice(2);
 if (!chromium) {
@@ -17,11 +17,7 @@ if (!chromium) {
   process.exit(2);
 }
 fs.mkdirSync(outDir, { recursive: true });
-let failures = 0;
-function expect(condition, message) {
-  console.log(`${condition ? 'ok  ' : 'FAIL'} ${message}`);
-  if (!condition) failures += 1;
-}
+const { expect, finish } = checks();
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 (async () => {
@@ -40,11 +36,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
     throw new Error(`simulate did not print ${pattern} in ${ms / 1000} s: ${out}`);
   };
   const url = (await waitFor(/live view at (http:\/\/127\.0\.0\.1:\d+\/)/, 60000))[1];
-  const browser = await puppeteer.launch({
-    executablePath: chromium,
-    headless: true,
-    args: ['--no-sandbox', '--disable-dev-shm-usage', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-  });
+  const browser = await launchChromium(chromium);
   try {
     const page = await browser.newPage();
     await page.setViewport({ width: 1280, height: 900 });
@@ -82,8 +74,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
   }
   const code = await exited;
   expect(code === 0, `simulate ends with the run's exit status 0 on SIGTERM (${code})`);
-  console.log(failures === 0 ? 'all checks passed' : `${failures} check(s) failed`);
-  process.exit(failures === 0 ? 0 : 1);
+  finish();
 })().catch((e) => {
   console.error(`FAIL ${e.stack || e}`);
   process.exit(1);

@@ -6,6 +6,7 @@ import { readEmbeddedData, indexAtOrBefore, alarmsAt, nextAlarmAfter } from './r
 import { RunScene } from './scene.js';
 import { Timeline, kAlarmStyle } from './timeline.js';
 import { connectLive } from './live.js';
+import { caseInAddress, showEvaluation } from './evaluation.js';
 
 const kSpeeds = [0.25, 0.5, 1, 2, 5, 10];
 const kLiveChartPeriod_ms = 250;
@@ -194,6 +195,7 @@ class View {
   /// What the browser test reads (host_sim/view/web/test/view_test.mjs).
   state() {
     return {
+      kind: this.data.kind,
       time_s: this.time_s,
       frame_index: this.scene.frameIndex,
       frames: this.data.frames.length,
@@ -208,8 +210,21 @@ class View {
 
 function start() {
   try {
-    const view = new View(readEmbeddedData(document));
-    window.scopekinView = view;
+    const data = readEmbeddedData(document);
+    if (data.kind === 'evaluation') {
+      // One page for the scorecard and every case: the address (#case=NAME) says which.
+      window.addEventListener('hashchange', () => location.reload());
+      const name = caseInAddress(data);
+      if (name === undefined) {
+        showEvaluation(data);
+        window.scopekinView = { state: () => ({ kind: 'evaluation', cases: data.scorecard.cases.length, viewable: Object.keys(data.case_views).length }) };
+        return;
+      }
+      window.scopekinView = new View(data.case_views[name]);
+      document.getElementById('banner').innerHTML = `<a href="#">← the scorecard of ${data.title}</a> · case ${name} (its timeline at ${data.case_views[name].series.time_s.length} points; <code>scopekin view</code> on the case's folder shows every period)`;
+      return;
+    }
+    window.scopekinView = new View(data);
   } catch (e) {
     document.getElementById('error').textContent = `This view cannot be shown: ${e.message}`;
     throw e;

@@ -1,0 +1,29 @@
+// What the view's browser tests share: the checks' tally and Debian's chromium, headless.
+'use strict';
+const puppeteer = require('puppeteer-core');
+
+/// expect(condition, message) prints "ok" or "FAIL" and counts failures; finish() exits with them.
+function checks() {
+  let failures = 0;
+  return {
+    expect(condition, message) {
+      console.log(`${condition ? 'ok  ' : 'FAIL'} ${message}`);
+      if (!condition) failures += 1;
+    },
+    finish() {
+      console.log(failures === 0 ? 'all checks passed' : `${failures} check(s) failed`);
+      process.exit(failures === 0 ? 0 : 1);
+    },
+  };
+}
+
+/// Headless chromium; WebGL in software (SwiftShader: the machines have no GPU); no sandbox (root).
+function launchChromium(executablePath) {
+  return puppeteer.launch({
+    executablePath,
+    headless: true,
+    args: ['--no-sandbox', '--disable-dev-shm-usage', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
+  });
+}
+
+module.exports = { checks, launchChromium };
