@@ -40,6 +40,11 @@ int run_view(const ViewOptions& o) {
             std::cerr << "scopekin view: the scorecard of " << data["scorecard"]["cases"].size()
                       << " cases, " << data["case_views"].size() << " with their replay"
                       << std::endl;
+        } else if (view::is_discrepancy_folder(o.folder)) {
+            data = view::read_discrepancy_view(o.folder);
+            std::cerr << "scopekin view: a discrepancy report, verdict "
+                      << data["report"]["verdict"].dump() << ", " << data["series"].size()
+                      << " output components" << std::endl;
         } else {
             data = view::read_run_view(o.folder);
             std::cerr << "scopekin view: " << data["series"]["time_s"].size()
@@ -99,7 +104,10 @@ void add_view_command(CLI::App& app) {
         "speed, scrub and next alarm. DIR is a folder of `scopekin simulate` (with --frames for "
         "the shapes over time; without, the snapshots' key moments), `scopekin demo` or one case "
         "of `scopekin evaluate`; or a whole evaluation's folder: its scorecard (every estimator "
-        "beside the baselines) and its cases, each a link to its replay. Serves the page on "
+        "beside the baselines) and its cases, each a link to its replay; or a discrepancy report's "
+        "folder (`scopekin discrepancy`): the verdict, the effects, the held-out error per output "
+        "and region before and after, and each output measured against the model before and "
+        "after. Serves the page on "
         "127.0.0.1 and prints its address until "
         "Ctrl-C, or writes it as one self-contained file with --export. Exit status 0 done, 2 "
         "no run in DIR, a malformed or truncated file, the port in use, or the page's scripts "

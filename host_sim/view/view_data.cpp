@@ -1,8 +1,11 @@
 #include "host_sim/view/view_data.hpp"
 
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -298,6 +301,85 @@ Json read_evaluation_view(
     }
     data["case_views"] = views;
     data["case_errors"] = errors;
+    return data;
+}
+
+bool is_discrepancy_folder(const fs::path& folder) {
+    return fs::is_regular_file(folder / "report.json") &&
+           fs::is_regular_file(folder / "series.csv");
+}
+
+Json read_discrepancy_view(const fs::path& folder) {
+    Json report;
+    try {
+        report = model::io::parse_json_file((folder / "report.json").string());
+    } catch (const std::exception& e) {
+        throw ViewDataError(e.what());
+    }
+    if (!report.is_object() || !report.contains("verdict"))
+        throw ViewDataError((folder / "report.json").string() + ": not a discrepancy report");
+    const fs::path file = folder / "series.csv";
+    std::ifstream in(file);
+    std::string line;
+    if (!in || !std::getline(in, line))
+        throw ViewDataError(file.string() + ": cannot be read, or empty");
+    if (line != "output,component,time_s,held_out,measured,before,after")
+        throw ViewDataError(file.string() + ": line 1: not series.csv's header");
+    // Each output's rows in order, kept whole; thinned to kMaxSeriesPoints below.
+    std::map<std::string, std::vector<std::array<double, 5>>> rows;
+    std::size_t number = 1;
+    while (std::getline(in, line)) {
+        ++number;
+        if (line.empty()) continue;
+        std::vector<std::string> cells;
+        std::size_t from = 0;
+        for (std::size_t at = line.find(',');; at = line.find(',', from)) {
+            cells.push_back(
+                line.substr(from, at == std::string::npos ? std::string::npos : at - from));
+            if (at == std::string::npos) break;
+            from = at + 1;
+        }
+        const std::string where = file.string() + ": line " + std::to_string(number);
+        if (cells.size() != 7)
+            throw ViewDataError(where + ": " + std::to_string(cells.size()) +
+                                " cells, not 7 (a truncated file?)");
+        std::array<double, 5> values{};
+        for (std::size_t k = 0; k < 5; ++k) {
+            const std::string& text = cells[2 + k];
+            const auto r = std::from_chars(text.data(), text.data() + text.size(), values[k]);
+            if (text.empty() || r.ec != std::errc() || r.ptr != text.data() + text.size() ||
+                !std::isfinite(values[k]))
+                throw ViewDataError(where + ": '" + text + "' is not a number");
+        }
+        rows[cells[0] + "/" + cells[1]].push_back(values);
+    }
+    Json series = Json::object();
+    for (const auto& [key, list] : rows) {
+        const std::size_t stride =
+            std::max<std::size_t>(1, (list.size() + kMaxSeriesPoints - 1) / kMaxSeriesPoints);
+        Json t = Json::array(), held = Json::array(), measured = Json::array(),
+             before = Json::array(), after = Json::array();
+        for (std::size_t k = 0; k < list.size(); k += stride) {
+            t.push_back(list[k][0]);
+            held.push_back(list[k][1] != 0.0 ? 1 : 0);
+            measured.push_back(list[k][2]);
+            before.push_back(list[k][3]);
+            after.push_back(list[k][4]);
+        }
+        series[key] = {{"time_s", t},
+                       {"held_out", held},
+                       {"measured", measured},
+                       {"before", before},
+                       {"after", after}};
+    }
+    Json data;
+    data["schema"] = "scopekin-view/1";
+    data["kind"] = "discrepancy";
+    data["title"] = "discrepancy " + fs::absolute(folder).lexically_normal().filename().string();
+    data["subtitle"] = "recording " + report.value("recording", std::string("?")) + " · model " +
+                       report.value("model", std::string("?"));
+    data["report"] = report;
+    data["series"] = series;
     return data;
 }
 

@@ -43,4 +43,12 @@ nlohmann::json read_evaluation_view(
     const std::filesystem::path& folder,
     const std::function<void(std::size_t, std::size_t, const std::string&)>& progress);
 
+/// True if `folder` holds a discrepancy report (`scopekin discrepancy`: report.json, series.csv).
+bool is_discrepancy_folder(const std::filesystem::path& folder);
+
+/// A discrepancy report (kind "discrepancy"): report.json as it is, and series.csv grouped by
+/// output and component (time_s, held_out, measured, before, after; at most kMaxSeriesPoints
+/// each). Throws ViewDataError naming the file and line.
+nlohmann::json read_discrepancy_view(const std::filesystem::path& folder);
+
 }  // namespace scopekin::view

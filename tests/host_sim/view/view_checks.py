@@ -10,6 +10,8 @@ view_checks.py CHECK SCOPEKIN RUN_DIR WORK
   port_in_use a port another program holds: exit 2, the message names the port
   unwritable  --export into a folder that does not exist: exit 3
   help        --help lists --port, --no-browser and --export
+  discrepancy a discrepancy report (written here, by hand: the view shows what the report says)
+              exported: the report as it is, series.csv grouped by output; a cut series.csv: exit 2
   evaluation  (RUN_DIR an evaluation) the page embeds the scorecard and each case's replay; a case
               whose files are gone is listed without one, with a warning, exit 0
 Exit status 0 passed, 1 a check failed.
@@ -167,6 +169,51 @@ def check_help():
     p = subprocess.run([SCOPEKIN, "view", "--help"], capture_output=True, text=True)
     expect(p.returncode == 0 and all(o in p.stdout for o in ["--port", "--no-browser", "--export"]),
            "--help lists --port, --no-browser and --export")
+
+
+def write_discrepancy(d):
+    """A small discrepancy report: one effect named, two outputs, 100 samples each."""
+    report = {
+        "recording": "recording.csv", "model": "default model", "verdict": "single",
+        "effects": [{"name": "ei_scale", "parameters": [{"name": "factor", "value": 0.85, "sd": 0.01}],
+                     "where": {"acts": "scope", "regions_where_it_closes_the_gap": ["sigmoid"]},
+                     "share_explained": 0.93, "entry": {}}],
+        "rmse_before": {"handle_force_N": 0.8, "tip_position_mm": 6.0},
+        "rmse_after": {"handle_force_N": 0.1, "tip_position_mm": 1.5},
+        "most_affected_output": {"name": "handle_force_N", "held_out_rmse_before": 0.8,
+                                 "held_out_rmse_after": 0.1, "reduction": 0.875},
+        "rmse_by_region": {"sigmoid": {"handle_force_N": {"samples": 100, "before": 0.8, "after": 0.1},
+                                       "tip_position_mm": {"samples": 100, "before": 6.0, "after": 1.5}}},
+    }
+    json.dump(report, open(os.path.join(d, "report.json"), "w"))
+    with open(os.path.join(d, "series.csv"), "w") as f:
+        f.write("output,component,time_s,held_out,measured,before,after\n")
+        for output, component, scale in [("handle_force_N", "x", 1.0), ("tip_position_mm", "y", 10.0)]:
+            for k in range(100):
+                t = 0.1 * k
+                f.write(f"{output},{component},{t:.1f},{1 if 30 <= k < 40 else 0},{scale * t:.3f},{scale * 1.2 * t:.3f},{scale * 1.01 * t:.3f}\n")
+    return report
+
+
+def check_discrepancy():
+    d = fresh("discrepancy")
+    report = write_discrepancy(d)
+    out = os.path.join(d, "view.html")
+    p = view(d, "--export", out)
+    expect(p.returncode == 0, f"--export of a discrepancy report exits 0 ({p.returncode}): {p.stderr.strip()}")
+    data = embedded_data(out)
+    expect(data["kind"] == "discrepancy" and data["report"] == report, "the page embeds report.json as it is")
+    s = data["series"]
+    expect(sorted(s) == ["handle_force_N/x", "tip_position_mm/y"], f"series.csv grouped by output and component ({sorted(s)})")
+    f = s["handle_force_N/x"]
+    expect(len(f["time_s"]) == 100 and sum(f["held_out"]) == 10 and abs(f["before"][50] - 1.2 * 5.0) < 1e-9,
+           "each group's samples as series.csv has them (100, 10 held out, before(5 s) = 6)")
+    text = open(os.path.join(d, "series.csv")).read().splitlines()
+    text[40] = ",".join(text[40].split(",")[:5])
+    open(os.path.join(d, "series.csv"), "w").write("\n".join(text) + "\n")
+    p = view(d, "--export", os.path.join(d, "cut.html"))
+    expect(p.returncode == 2 and "series.csv: line 41" in p.stderr, f"a row cut short: exit 2, its line named ({p.returncode}): {p.stderr.strip()}")
+    write_discrepancy(d)  # whole again, for the browser test
 
 
 def check_evaluation():

@@ -7,6 +7,7 @@ import { RunScene } from './scene.js';
 import { Timeline, kAlarmStyle } from './timeline.js';
 import { connectLive } from './live.js';
 import { caseInAddress, showEvaluation } from './evaluation.js';
+import { showDiscrepancy } from './discrepancy.js';
 
 const kSpeeds = [0.25, 0.5, 1, 2, 5, 10];
 const kLiveChartPeriod_ms = 250;
@@ -211,6 +212,11 @@ class View {
 function start() {
   try {
     const data = readEmbeddedData(document);
+    if (data.kind === 'discrepancy') {
+      showDiscrepancy(data);
+      window.scopekinView = { state: () => ({ kind: 'discrepancy', verdict: data.report.verdict, charts: document.querySelectorAll('#outputs .uplot').length }) };
+      return;
+    }
     if (data.kind === 'evaluation') {
       // One page for the scorecard and every case: the address (#case=NAME) says which.
       window.addEventListener('hashchange', () => location.reload());
