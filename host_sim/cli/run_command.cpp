@@ -6,18 +6,56 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/simulator/box_observer.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
+#include "host_sim/simulator/live_simulation.hpp"
+#include "host_sim/simulator/world_readout.hpp"
+#include "host_sim/view/live_view.hpp"
+#include "host_sim/view/view_page.hpp"
+#include "host_sim/view/view_server.hpp"
+#include "model/colon/bundled_colons.hpp"
+#include "model/scope/cf_q160l.hpp"
 
 namespace scopekin::cli {
 namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
+
+/// The box's page (`run --view`): its colon is the one its reduced model was made in (the
+/// bundled default, model/reduction/training.json).
+std::unique_ptr<view::LiveView> open_box_view(const RunOptions& options) {
+    const model::ColonTube colon = model::default_colon(model::cf_q160l::kRadius_mm);
+    auto live_view = std::make_unique<view::LiveView>(
+        view::live_page_data(
+            nlohmann::json::parse(host_sim::WorldReader::colon_json(colon).dump()), 0,
+            "the box: " + fs::path(options.recording).filename().string(),
+            "what the box knows (no truth): its tip along its model's colon, its uncertainty, "
+            "its stations and alarms, from " +
+                options.recording,
+            true),
+        options.port);
+    std::printf("scopekin run: the box's view at %s\n", live_view->url().c_str());
+    std::fflush(stdout);
+    if (!options.no_browser) view::open_in_browser(live_view->url());
+    return live_view;
+}
+
+/// Waits until the recording's time `t_us` is due at `pace` recorded seconds per wall second.
+void keep_pace(std::int64_t t_us, std::int64_t first_us, double pace,
+               std::chrono::steady_clock::time_point wall_start) {
+    if (!(pace > 0)) return;
+    const auto due =
+        wall_start +
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double>(static_cast<double>(t_us - first_us) * 1e-6 / pace));
+    std::this_thread::sleep_until(due);
+}
 
 }  // namespace
 
@@ -38,15 +76,44 @@ int run_recording(const RunOptions& options) {
                   << ": no rows after the header\n";
         return 2;
     }
+    std::unique_ptr<view::LiveView> live_view;
+    if (options.view) {
+        try {
+            live_view = open_box_view(options);
+        } catch (const view::ViewServerError& e) {
+            std::cerr << "scopekin run: --view: " << e.what() << "\n";
+            return 2;
+        } catch (const view::ViewAssetsError& e) {
+            std::cerr << "scopekin run: --view: " << e.what() << "\n";
+            return 2;
+        }
+    }
     try {
         const fs::path dir(options.out);
         prepare_directory(dir, {"summary.json", "firmware.csv", "firmware.incomplete.csv"});
         PartFile firmware_csv(dir / "firmware.csv", dir / "firmware.incomplete.csv");
         host_sim::BoxObserver observer(&firmware_csv.stream());
-        host_sim::FirmwareLoop loop([&](const host_sim::BoxPeriod& p) { observer.observe(p); });
+        host_sim::HandleReading handle;  // what the box last received (the page's handle rows)
+        host_sim::FirmwareLoop loop([&](const host_sim::BoxPeriod& p) {
+            observer.observe(p);
+            if (live_view) {
+                const double t = static_cast<double>(p.time_us) * 1e-6;
+                live_view->step({t, [&] { return host_sim::box_view_row(t, handle, *p.outputs); },
+                                 [] { return std::string(); }});
+            }
+        });
+        const auto wall_start = std::chrono::steady_clock::now();
         ProgressBar bar(options.quiet);
         const double end_s = static_cast<double>(rec.rows.back().time_us) * 1e-6;
         for (std::size_t i = 0; i < rec.rows.size(); ++i) {
+            if (live_view)
+                keep_pace(rec.rows[i].time_us, rec.rows.front().time_us, options.pace, wall_start);
+            if (rec.rows[i].handle) {
+                handle.force_N = rec.rows[i].handle->force_N;
+                handle.torque_Nmm = rec.rows[i].handle->torque_Nmm;
+            }
+            if (rec.rows[i].insertion_roll)
+                handle.insertion_mm = rec.rows[i].insertion_roll->insertion_mm;
             loop.deliver(rec.rows[i]);
             if (i % 1000 == 0) {
                 char text[64];
@@ -95,6 +162,15 @@ int run_recording(const RunOptions& options) {
             box["alarms"].size(), rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
             (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
         print_box_faults(s["box"]);
+        if (live_view) {
+            live_view->finish(std::string());
+            std::printf(
+                "scopekin run: the box's view stays at %s (%zu live messages sent; "
+                "Ctrl-C to stop)\n",
+                live_view->url().c_str(), live_view->messages());
+            std::fflush(stdout);
+            live_view->wait_for_stop_signal();
+        }
         return 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin run: " << e.what() << "\n";
@@ -114,7 +190,9 @@ void add_run_command(CLI::App& app) {
         "DIR/summary.json (alarms, gaps, the box's faults and counters). A "
         "malformed recording is refused with its line and column (exit 2); a gap in the handle "
         "signals is flagged, "
-        "not refused. Exit status 0 done, 2 invalid recording, 3 an output cannot be written.");
+        "not refused. With --view the box's own page (`scopekin view`'s, live: only what the box "
+        "knows, no truth) follows the recording at --pace. Exit status 0 done, 2 invalid "
+        "recording (or --view's port in use), 3 an output cannot be written.");
     cmd->add_option("recording", options->recording, "Recording CSV file")
         ->required()
         ->check(CLI::ExistingFile);
@@ -130,6 +208,24 @@ void add_run_command(CLI::App& app) {
                     "named): the box would step a period every 5 ms across the gap")
         ->default_val(recording::kDefaultMaxGap_s)
         ->check(positive_seconds());
+    CLI::Option* view_flag = cmd->add_flag(
+        "--view", options->view,
+        "The box's page in the browser while it runs: what a physician would glance at (the "
+        "box's tip along its model's colon with its uncertainty, its stations, the alarms, the "
+        "handle's force); then served until Ctrl-C. Prints the address");
+    cmd->add_option("--port", options->port, "With --view: the port on 127.0.0.1 (0: any free one)")
+        ->default_val(8765)
+        ->check(CLI::Range(0, 65535))
+        ->needs(view_flag);
+    cmd->add_flag("--no-browser", options->no_browser,
+                  "With --view: do not ask the desktop to open a browser")
+        ->needs(view_flag);
+    cmd->add_option("--pace", options->pace,
+                    "With --view: recorded seconds per wall second (1: as the box lived it; 0: "
+                    "as fast as it goes)")
+        ->default_val(1.0)
+        ->check(CLI::Range(0.0, 1000.0))
+        ->needs(view_flag);
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_recording(*options)); });
 }

@@ -1,6 +1,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <cstdint>
 #include <string>
 
 #include "host_sim/recording/recording_reader.hpp"
@@ -13,6 +14,10 @@ struct RunOptions {
     double gap_threshold_s = 0.05;
     double max_gap_s = recording::kDefaultMaxGap_s;
     bool quiet = false;
+    bool view = false;  ///< the box's page (what the box knows, no truth), live while it runs
+    std::uint16_t port = 8765;
+    bool no_browser = false;
+    double pace = 1.0;  ///< with view: recorded seconds per wall second (0: as fast as it goes)
 };
 
 /// The command's work; returns its exit status (also used by `batch`).

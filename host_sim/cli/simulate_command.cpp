@@ -16,6 +16,7 @@
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
+#include "host_sim/simulator/world_readout.hpp"
 #include "host_sim/view/live_view.hpp"
 #include "host_sim/view/view_data.hpp"
 #include "host_sim/view/view_page.hpp"
@@ -107,7 +108,11 @@ int run_world(const model::Scenario& sc, const SimulateOptions& options) {
     if (options.view) {
         try {
             live_view = std::make_unique<view::LiveView>(
-                sc, fs::path(options.out).filename().string(), options.port);
+                view::live_page_data(
+                    nlohmann::json::parse(host_sim::WorldReader::colon_json(*sc.colon).dump()),
+                    sc.scope.elements + 1, fs::path(options.out).filename().string(),
+                    sc.description + " · live", false),
+                options.port);
         } catch (const view::ViewServerError& e) {
             std::cerr << "scopekin simulate: --view: " << e.what() << "\n";
             return 2;

@@ -120,24 +120,35 @@ std::string frame_text(const model::World& world) {
     return out;
 }
 
-double q16(fixed_point::Q16_16 v) {
-    return static_cast<double>(v.raw()) / 65536.0;
-}
-
 /// The live view's row at a world step: the handle (true), the truth's tip and largest station
 /// force, the box's last period (host_sim/view/README.md, "Live").
 Json view_row(const WorldReadout& world, const model::truth::TruthReadout& truth,
               const kinetics::Outputs& box) {
+    Json row = box_view_row(
+        world.time_s, {world.handle_force_N, world.handle_torque_Nmm, world.insertion_mm}, box);
+    row["true_tip_path_mm"] = truth.tip_path_mm;
+    row["true_max_force_N"] = truth.max_station_force_N;
+    return row;
+}
+
+}  // namespace
+
+namespace {
+double q16(fixed_point::Q16_16 v) {
+    return static_cast<double>(v.raw()) / 65536.0;
+}
+}  // namespace
+
+nlohmann::ordered_json box_view_row(double time_s, const HandleReading& handle,
+                                    const kinetics::Outputs& box) {
     Json stations = Json::array();
     for (std::size_t k = 0; k < box.active_stations && k < box.stations.size(); ++k)
         stations.push_back(Json::array(
             {q16(box.stations[k].path_position_mm), q16(box.stations[k].normal_force_N)}));
-    return {{"time_s", world.time_s},
-            {"handle_force_N", world.handle_force_N},
-            {"handle_torque_Nmm", world.handle_torque_Nmm},
-            {"insertion_mm", world.insertion_mm},
-            {"true_tip_path_mm", truth.tip_path_mm},
-            {"true_max_force_N", truth.max_station_force_N},
+    return {{"time_s", time_s},
+            {"handle_force_N", handle.force_N},
+            {"handle_torque_Nmm", handle.torque_Nmm},
+            {"insertion_mm", handle.insertion_mm},
             {"box_tip_path_mm", q16(box.tip_path_mm)},
             {"box_tip_sd_mm", q16(box.tip_uncertainty_mm)},
             {"box_max_force_N", q16(box.max_contact_force_N)},
@@ -146,8 +157,6 @@ Json view_row(const WorldReadout& world, const model::truth::TruthReadout& truth
             {"fault_flags", box.fault_flags},
             {"stations", stations}};
 }
-
-}  // namespace
 
 std::string region_at_path(const model::ColonTube& colon, double path_mm) {
     std::size_t i = 0;

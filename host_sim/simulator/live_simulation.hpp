@@ -28,6 +28,18 @@ struct LiveViewStep {
     std::function<std::string()> frame;  ///< a frames.jsonl line (JSON text)
 };
 
+/// What the handle reads (the live view's handle columns).
+struct HandleReading {
+    double force_N = 0;
+    double torque_Nmm = 0;
+    double insertion_mm = 0;
+};
+
+/// The live view's row of the box alone (no truth): the time, the handle, the box's outputs
+/// (tip, SD, largest force, alarms, fault flags, stations: path and normal force).
+nlohmann::ordered_json box_view_row(double time_s, const HandleReading& handle,
+                                    const kinetics::Outputs& box);
+
 struct LiveStreams {
     std::ostream* recording = nullptr;  ///< recording.csv (sensor rows)
     std::ostream* world = nullptr;      ///< world.csv (true state at the output rate)

@@ -1,7 +1,6 @@
 #include "host_sim/view/live_view.hpp"
 
 #include "host_sim/evaluate/estimators.hpp"
-#include "host_sim/simulator/world_readout.hpp"
 #include "host_sim/view/view_page.hpp"
 
 namespace scopekin::view {
@@ -9,14 +8,16 @@ namespace scopekin::view {
 using Json = nlohmann::json;
 using OrderedJson = nlohmann::ordered_json;
 
-Json live_page_data(const model::Scenario& scenario, const std::string& title) {
+Json live_page_data(const Json& colon, std::size_t scope_max_points, const std::string& title,
+                    const std::string& subtitle, bool box_only) {
     Json data;
     data["schema"] = "scopekin-view/1";
     data["kind"] = "live";
+    data["box_only"] = box_only;
     data["title"] = title;
-    data["subtitle"] = scenario.description + " · live";
-    data["colon"] = Json::parse(host_sim::WorldReader::colon_json(*scenario.colon).dump());
-    data["scope_max_points"] = scenario.scope.elements + 1;
+    data["subtitle"] = subtitle;
+    data["colon"] = colon;
+    data["scope_max_points"] = scope_max_points;
     data["frames"] = Json::array();
     data["frames_source"] = "live";
     Json series;
@@ -35,8 +36,8 @@ Json live_page_data(const model::Scenario& scenario, const std::string& title) {
     return data;
 }
 
-LiveView::LiveView(const model::Scenario& scenario, const std::string& title, std::uint16_t port)
-    : server_(render_view_page(live_page_data(scenario, title), view_assets_folder())) {
+LiveView::LiveView(const Json& page_data, std::uint16_t port)
+    : server_(render_view_page(page_data, view_assets_folder())) {
     url_ = server_.bind(port);
     server_.start();
 }

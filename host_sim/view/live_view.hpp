@@ -11,7 +11,6 @@
 
 #include "host_sim/simulator/live_simulation.hpp"
 #include "host_sim/view/view_server.hpp"
-#include "model/scenario/scenario.hpp"
 
 namespace scopekin::view {
 
@@ -22,9 +21,9 @@ inline constexpr double kLiveRowPeriod_s = 0.02;
 
 class LiveView {
 public:
-    /// The live page for `scenario` (its colon at rest; no data yet), bound to 127.0.0.1:port and
-    /// served. Throws ViewServerError (the port) or ViewAssetsError (the page not built).
-    LiveView(const model::Scenario& scenario, const std::string& title, std::uint16_t port);
+    /// The live page (live_page_data: the colon at rest, no data yet), bound to 127.0.0.1:port
+    /// and served. Throws ViewServerError (the port) or ViewAssetsError (the page not built).
+    LiveView(const nlohmann::json& page_data, std::uint16_t port);
     /// The page's address.
     const std::string& url() const { return url_; }
     /// Takes one world step (LiveStreams::view_step): its row, and a frame when one is due.
@@ -47,7 +46,10 @@ private:
     std::chrono::steady_clock::time_point last_send_{};
 };
 
-/// The live page's data (schema scopekin-view/1, kind "live"): the colon at rest, empty series.
-nlohmann::json live_page_data(const model::Scenario& scenario, const std::string& title);
+/// The live page's data (schema scopekin-view/1, kind "live"): the colon at rest (WorldReader's
+/// colon_json), empty series. box_only: the page of the box (`scopekin run --view`): what the box
+/// knows, no truth; its colon is the one its reduced model was made in.
+nlohmann::json live_page_data(const nlohmann::json& colon, std::size_t scope_max_points,
+                              const std::string& title, const std::string& subtitle, bool box_only);
 
 }  // namespace scopekin::view

@@ -26,4 +26,17 @@ function launchChromium(executablePath) {
   });
 }
 
-module.exports = { checks, launchChromium };
+/// A page of 1280 x 900 with generous timeouts (the tests share a loaded 2-core machine) and the
+/// console errors and uncaught exceptions collected into page.errors.
+async function newPage(browser) {
+  const page = await browser.newPage();
+  await page.setViewport({ width: 1280, height: 900 });
+  page.setDefaultTimeout(120000);
+  page.setDefaultNavigationTimeout(120000);
+  page.errors = [];
+  page.on('console', (m) => { if (m.type() === 'error') page.errors.push(m.text()); });
+  page.on('pageerror', (e) => page.errors.push(String(e)));
+  return page;
+}
+
+module.exports = { checks, launchChromium, newPage };

@@ -9,7 +9,7 @@
 const { spawn, spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage } = require('./browser_support.cjs');
 
 const [scopekin, runDir, outDir, chromium] = process.argv.slice(2);
 if (!scopekin || !runDir || !outDir || !chromium) {
@@ -71,13 +71,10 @@ async function waitFrames(page, n) {
 
 /// Loads `url`, checks it, scrubs to the first alarm; `name` prefixes the screenshots.
 async function checkPage(browser, url, name) {
-  const page = await browser.newPage();
-  await page.setViewport({ width: 1280, height: 900 });
-  const errors = [];
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-  page.on('pageerror', (e) => errors.push(String(e)));
-  await page.goto(url, { waitUntil: 'load', timeout: 60000 });
-  await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 30000 });
+  const page = await newPage(browser);
+  const { errors } = page;
+  await page.goto(url, { waitUntil: 'load', timeout: 120000 });
+  await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 120000 });
   await waitFrames(page, 3);
   const state = await page.evaluate(() => window.scopekinView.state());
   expect(state.frames > 1, `${name}: the page holds the run's shapes (${state.frames} frames)`);

@@ -6,7 +6,7 @@
 'use strict';
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage } = require('./browser_support.cjs');
 
 const [file, outDir, chromium] = process.argv.slice(2);
 if (!chromium) {
@@ -19,13 +19,10 @@ const { expect, finish } = checks();
 (async () => {
   const browser = await launchChromium(chromium);
   try {
-    const page = await browser.newPage();
-    await page.setViewport({ width: 1280, height: 900 });
-    const errors = [];
-    page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-    page.on('pageerror', (e) => errors.push(String(e)));
+    const page = await newPage(browser);
+    const { errors } = page;
     await page.goto(`file://${path.resolve(file)}`, { waitUntil: 'load' });
-    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 30000 });
+    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 120000 });
     const state = await page.evaluate(() => window.scopekinView.state());
     expect(state.kind === 'discrepancy' && state.verdict === 'single', `the page shows the report (${state.kind}, verdict ${state.verdict})`);
     expect(state.charts === 2, `one chart per output component (${state.charts})`);

@@ -8,7 +8,7 @@
 const { spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage } = require('./browser_support.cjs');
 
 const [scopekin, evaluationDir, outDir, chromium] = process.argv.slice(2);
 if (!chromium) {
@@ -25,13 +25,10 @@ const { expect, finish } = checks();
   const scorecard = JSON.parse(fs.readFileSync(path.join(evaluationDir, 'scorecard.json'), 'utf8'));
   const browser = await launchChromium(chromium);
   try {
-    const page = await browser.newPage();
-    await page.setViewport({ width: 1280, height: 900 });
-    const errors = [];
-    page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-    page.on('pageerror', (e) => errors.push(String(e)));
+    const page = await newPage(browser);
+    const { errors } = page;
     await page.goto(`file://${path.resolve(exported)}`, { waitUntil: 'load' });
-    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 30000 });
+    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 120000 });
     const state = await page.evaluate(() => window.scopekinView.state());
     expect(state.kind === 'evaluation', `the page shows the scorecard (${state.kind})`);
     const rows = await page.$$eval('#cases tr.viewable a', (links) => links.map((a) => a.textContent));
@@ -42,7 +39,7 @@ const { expect, finish } = checks();
 
     // A link changes the address's #case=NAME; the page loads again and shows that case.
     await page.click('#cases tr.viewable a');
-    await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.state().kind === 'run', { timeout: 30000 });
+    await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.state().kind === 'run', { timeout: 120000 });
     const shown = await page.evaluate(() => ({ state: window.scopekinView.state(), hash: location.hash, title: document.getElementById('title').textContent }));
     expect(shown.state.kind === 'run' && shown.title === rows[0], `the link shows case ${rows[0]}'s replay (${shown.hash}, ${shown.state.frames} frames, ${shown.state.alarms.length} alarms)`);
     const drawn = await page.evaluate(() => {
@@ -59,7 +56,7 @@ const { expect, finish } = checks();
     expect(drawn > 0.01, `the case's canvas is drawn (${(100 * drawn).toFixed(1)} % of its pixels)`);
     await page.screenshot({ path: path.join(outDir, 'evaluation-case.png') });
     await page.click('#banner a');
-    const back = await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.state().kind === 'evaluation', { timeout: 30000 })
+    const back = await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.state().kind === 'evaluation', { timeout: 120000 })
       .then(() => true, () => false);
     expect(back, 'the back link returns to the scorecard');
     expect(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(' | ')}` : ''}`);

@@ -9,7 +9,7 @@
 const { spawn } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage } = require('./browser_support.cjs');
 
 const [scopekin, scenario, runDir, outDir, chromium] = process.argv.slice(2);
 if (!chromium) {
@@ -38,13 +38,10 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
   const url = (await waitFor(/live view at (http:\/\/127\.0\.0\.1:\d+\/)/, 60000))[1];
   const browser = await launchChromium(chromium);
   try {
-    const page = await browser.newPage();
-    await page.setViewport({ width: 1280, height: 900 });
-    const errors = [];
-    page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-    page.on('pageerror', (e) => errors.push(String(e)));
-    await page.goto(url, { waitUntil: 'load', timeout: 60000 });
-    await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.messagesReceived >= 3, { timeout: 60000 });
+    const page = await newPage(browser);
+    const { errors } = page;
+    await page.goto(url, { waitUntil: 'load', timeout: 120000 });
+    await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.messagesReceived >= 3, { timeout: 120000 });
     const a = await page.evaluate(() => window.scopekinView.state());
     const wallA = Date.now();
     await sleep(1500);
@@ -64,7 +61,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
     expect(/complete/.test(ended.banner), `the live page says the run is complete ("${ended.banner}")`);
     await page.screenshot({ path: path.join(outDir, 'live-ended.png') });
     await page.reload({ waitUntil: 'load' });
-    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 30000 });
+    await page.waitForFunction(() => window.scopekinView !== undefined, { timeout: 120000 });
     const replay = await page.evaluate(() => window.scopekinView.state());
     expect(!replay.live && replay.frames > 0, `a reload shows the replay (${replay.frames} frames, ${replay.alarms.length} alarms)`);
     expect(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(' | ')}` : ''}`);

@@ -55,8 +55,12 @@ class View {
     };
     this.framesDrawn = 0;
     requestAnimationFrame(loop);
+    if (data.box_only)
+      document.querySelector('.legend3d').innerHTML = '<div><span class="swatch" style="background:#00bcd4"></span>the box\'s tip along its model\'s colon, its 1-SD sphere</div>' +
+        '<div><span class="swatch" style="background:#2ca02c"></span>its stations, coloured by their estimated force: &lt; 5, 5–10 (yellow), 10–14 (orange), ≥ 14 N (red)</div>' +
+        '<div>only what the box knows: no truth, no scope shape</div>';
     if (this.live) {
-      document.getElementById('banner').textContent = 'live: the run is streamed as it is simulated';
+      document.getElementById('banner').textContent = data.box_only ? 'live: the box\'s outputs as it computes them' : 'live: the run is streamed as it is simulated';
       connectLive(this);
     }
   }
@@ -162,9 +166,10 @@ class View {
       : 'no shapes recorded';
     const readout = document.getElementById('readout');
     const f = (v, d = 1) => (v === null || v === undefined ? '–' : v.toFixed(d));
+    const truth = (text) => (this.data.box_only ? '' : text);
     readout.textContent = `handle ${f(s.handle_force_N[row])} N · insertion ${f(s.insertion_mm[row], 0)} mm · ` +
-      `tip: box ${f(s.box_tip_path_mm[row], 0)} ± ${f(s.box_tip_sd_mm[row], 0)} mm, true ${f(s.true_tip_path_mm[row], 0)} mm · ` +
-      `largest force: box ${f(s.box_max_force_N[row])} N, true ${f(s.true_max_force_N[row])} N`;
+      `tip: box ${f(s.box_tip_path_mm[row], 0)} ± ${f(s.box_tip_sd_mm[row], 0)} mm${truth(`, true ${f(s.true_tip_path_mm[row], 0)} mm`)} · ` +
+      `largest force: box ${f(s.box_max_force_N[row])} N${truth(`, true ${f(s.true_max_force_N[row])} N`)}`;
     document.getElementById('scrub').value = String(this.time_s);
     this.sceneDirty = true;
     if (this.chartData !== 'stale') this.chartData = 'cursor';

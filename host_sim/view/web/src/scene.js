@@ -230,7 +230,10 @@ export class RunScene {
 
   showEstimate(estimate) {
     const line = this.frameCentreline;
-    if (Number.isFinite(estimate.true_tip_path_mm))
+    // The true tip: the scope's last node where there is a shape, else the truth's path (none on
+    // the box's own page).
+    this.trueTip.visible = Number.isFinite(estimate.true_tip_path_mm);
+    if (this.trueTip.visible)
       this.trueTip.position.set(...pointAtArc(line, this.restArcs, estimate.true_tip_path_mm));
     const frame = this.data.frames[this.frameIndex];
     if (frame && frame.scope_mm.length > 0) this.trueTip.position.set(...frame.scope_mm[frame.scope_mm.length - 1]);

@@ -108,7 +108,7 @@ export class Timeline {
     }, columns[0], container));
 
     this.charts.push(new uPlot({
-      ...common('Tip along the colon: the box (±1 SD) and the truth', 170),
+      ...common(view.data.box_only ? 'Tip along the colon: the box (±1 SD) and the insertion' : 'Tip along the colon: the box (±1 SD) and the truth', 170),
       series: [
         { label: 't [s]' },
         { label: 'insertion [mm]', stroke: '#999999', width: 1, dash: [4, 4] },
@@ -122,7 +122,7 @@ export class Timeline {
     }, columns[1], container));
 
     this.charts.push(new uPlot({
-      ...common('Largest contact force: the box and the truth', 150),
+      ...common(view.data.box_only ? 'Largest contact force: the box' : 'Largest contact force: the box and the truth', 150),
       series: [
         { label: 't [s]' },
         { label: 'true [N]', stroke: '#ffffff', width: 1.2 },
