@@ -10,6 +10,7 @@
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
+#include "host_sim/cli/view_command.hpp"
 #include "host_sim/recording/recording_reader.hpp"
 #include "host_sim/simulator/box_observer.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
@@ -208,18 +209,11 @@ void add_run_command(CLI::App& app) {
                     "named): the box would step a period every 5 ms across the gap")
         ->default_val(recording::kDefaultMaxGap_s)
         ->check(positive_seconds());
-    CLI::Option* view_flag = cmd->add_flag(
-        "--view", options->view,
+    CLI::Option* view_flag = add_live_view_options(
+        cmd, options->view, options->port, options->no_browser,
         "The box's page in the browser while it runs: what a physician would glance at (the "
         "box's tip along its model's colon with its uncertainty, its stations, the alarms, the "
         "handle's force); then served until Ctrl-C. Prints the address");
-    cmd->add_option("--port", options->port, "With --view: the port on 127.0.0.1 (0: any free one)")
-        ->default_val(8765)
-        ->check(CLI::Range(0, 65535))
-        ->needs(view_flag);
-    cmd->add_flag("--no-browser", options->no_browser,
-                  "With --view: do not ask the desktop to open a browser")
-        ->needs(view_flag);
     cmd->add_option("--pace", options->pace,
                     "With --view: recorded seconds per wall second (1: as the box lived it; 0: "
                     "as fast as it goes)")

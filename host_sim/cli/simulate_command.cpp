@@ -16,6 +16,7 @@
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
+#include "host_sim/cli/view_command.hpp"
 #include "host_sim/simulator/world_readout.hpp"
 #include "host_sim/view/live_view.hpp"
 #include "host_sim/view/view_data.hpp"
@@ -245,19 +246,12 @@ void add_simulate_command(CLI::App& app) {
                     "100; 0, the default: none), which `scopekin view DIR` replays in 3D")
         ->default_val(0)
         ->check(CLI::Range(0.0, 100.0));
-    CLI::Option* view_flag = cmd->add_flag(
-        "--view", options->view,
+    add_live_view_options(
+        cmd, options->view, options->port, options->no_browser,
         "World scenarios: stream the run to the browser view while it runs (`scopekin view`'s "
         "page, live: at most 25 updates per second), then serve the run's replay there until "
         "Ctrl-C (with frames.jsonl at 10 Hz unless --frames says otherwise). Prints the address; "
         "exit status 2 if the port is in use");
-    cmd->add_option("--port", options->port, "With --view: the port on 127.0.0.1 (0: any free one)")
-        ->default_val(8765)
-        ->check(CLI::Range(0, 65535))
-        ->needs(view_flag);
-    cmd->add_flag("--no-browser", options->no_browser,
-                  "With --view: do not ask the desktop to open a browser")
-        ->needs(view_flag);
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_simulate(*options)); });
 }

@@ -92,6 +92,19 @@ int run_view(const ViewOptions& o) {
 
 }  // namespace
 
+CLI::Option* add_live_view_options(CLI::App* cmd, bool& view, std::uint16_t& port, bool& no_browser,
+                                   const std::string& view_help) {
+    CLI::Option* flag = cmd->add_flag("--view", view, view_help);
+    cmd->add_option("--port", port, "With --view: the port on 127.0.0.1 (0: any free one)")
+        ->default_val(8765)
+        ->check(CLI::Range(0, 65535))
+        ->needs(flag);
+    cmd->add_flag("--no-browser", no_browser,
+                  "With --view: do not ask the desktop to open a browser")
+        ->needs(flag);
+    return flag;
+}
+
 void add_view_command(CLI::App& app) {
     auto options = std::make_shared<ViewOptions>();
     CLI::App* cmd = app.add_subcommand(
