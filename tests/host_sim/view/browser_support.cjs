@@ -39,4 +39,20 @@ async function newPage(browser) {
   return page;
 }
 
-module.exports = { checks, launchChromium, newPage };
+/// The share of the 3D canvas's pixels that are not the background (0x101418).
+async function drawnShare(page) {
+  return page.evaluate(() => {
+    const src = document.querySelector('#scene canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width; c.height = src.height;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0);
+    const px = ctx.getImageData(0, 0, c.width, c.height).data;
+    let drawn = 0;
+    for (let k = 0; k < px.length; k += 4)
+      if (Math.abs(px[k] - 0x10) + Math.abs(px[k + 1] - 0x14) + Math.abs(px[k + 2] - 0x18) > 12) drawn += 1;
+    return drawn / (px.length / 4);
+  });
+}
+
+module.exports = { checks, launchChromium, newPage, drawnShare };

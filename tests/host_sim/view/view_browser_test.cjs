@@ -9,7 +9,7 @@
 const { spawn, spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium, newPage } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage, drawnShare } = require('./browser_support.cjs');
 
 const [scopekin, runDir, outDir, chromium] = process.argv.slice(2);
 if (!scopekin || !runDir || !outDir || !chromium) {
@@ -32,22 +32,6 @@ function serve() {
     });
     child.stderr.on('data', (d) => process.stderr.write(d));
     child.on('exit', (code) => { clearTimeout(timer); reject(new Error(`scopekin view exited ${code}: ${out}`)); });
-  });
-}
-
-/// The share of the 3D canvas's pixels that are not the background (0x101418).
-async function drawnShare(page) {
-  return page.evaluate(() => {
-    const src = document.querySelector('#scene canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width; c.height = src.height;
-    const ctx = c.getContext('2d');
-    ctx.drawImage(src, 0, 0);
-    const px = ctx.getImageData(0, 0, c.width, c.height).data;
-    let drawn = 0;
-    for (let k = 0; k < px.length; k += 4)
-      if (Math.abs(px[k] - 0x10) + Math.abs(px[k + 1] - 0x14) + Math.abs(px[k + 2] - 0x18) > 12) drawn += 1;
-    return drawn / (px.length / 4);
   });
 }
 

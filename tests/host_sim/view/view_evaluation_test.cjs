@@ -8,7 +8,7 @@
 const { spawnSync } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
-const { checks, launchChromium, newPage } = require('./browser_support.cjs');
+const { checks, launchChromium, newPage, drawnShare } = require('./browser_support.cjs');
 
 const [scopekin, evaluationDir, outDir, chromium] = process.argv.slice(2);
 if (!chromium) {
@@ -42,17 +42,7 @@ const { expect, finish } = checks();
     await page.waitForFunction(() => window.scopekinView !== undefined && window.scopekinView.state().kind === 'run', { timeout: 120000 });
     const shown = await page.evaluate(() => ({ state: window.scopekinView.state(), hash: location.hash, title: document.getElementById('title').textContent }));
     expect(shown.state.kind === 'run' && shown.title === rows[0], `the link shows case ${rows[0]}'s replay (${shown.hash}, ${shown.state.frames} frames, ${shown.state.alarms.length} alarms)`);
-    const drawn = await page.evaluate(() => {
-      const src = document.querySelector('#scene canvas');
-      const c = document.createElement('canvas');
-      c.width = src.width; c.height = src.height;
-      const ctx = c.getContext('2d');
-      ctx.drawImage(src, 0, 0);
-      const px = ctx.getImageData(0, 0, c.width, c.height).data;
-      let n = 0;
-      for (let k = 0; k < px.length; k += 4) if (Math.abs(px[k] - 0x10) + Math.abs(px[k + 1] - 0x14) + Math.abs(px[k + 2] - 0x18) > 12) n += 1;
-      return n / (px.length / 4);
-    });
+    const drawn = await drawnShare(page);
     expect(drawn > 0.01, `the case's canvas is drawn (${(100 * drawn).toFixed(1)} % of its pixels)`);
     await page.screenshot({ path: path.join(outDir, 'evaluation-case.png') });
     await page.click('#banner a');
