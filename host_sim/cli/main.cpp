@@ -8,6 +8,7 @@
 #include "host_sim/cli/batch_command.hpp"
 #include "host_sim/cli/demo_command.hpp"
 #include "host_sim/cli/discrepancy_command.hpp"
+#include "host_sim/cli/display_command.hpp"
 #include "host_sim/cli/evaluate_command.hpp"
 #include "host_sim/cli/patient_command.hpp"
 #include "host_sim/cli/replay_command.hpp"
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
     scopekin::cli::add_patient_commands(app);
     scopekin::cli::add_evaluate_commands(app);
     scopekin::cli::add_view_command(app);
+    scopekin::cli::add_display_command(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::RuntimeError& status) {

@@ -10,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "hal/candump/candump_log.hpp"
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
 #include "host_sim/replay/candump_replay.hpp"
@@ -26,7 +27,24 @@ struct ReplayOptions {
     std::string log;
     std::string out;
     double max_gap_s = 60.0;
+    std::string record;  ///< the replayed box's log (its frames in and out), candump format
     bool quiet = false;
+};
+
+/// `--record FILE`: every frame the replayed box received and sent, as `scopekin-box --record`
+/// writes them (a box log: `scopekin display` shows it, `scopekin replay` replays it).
+class BoxLogWriter {
+public:
+    explicit BoxLogWriter(const std::string& path) : file_(path) {}
+    void write(const hal::CandumpRecord& record) {
+        std::array<char, hal::kCandumpLineCapacity> line{};
+        const std::size_t n = hal::format_candump_line(record, line);
+        file_.stream().write(line.data(), static_cast<std::streamsize>(n));
+    }
+    void finish() { file_.finish(true); }
+
+private:
+    PartFile file_;
 };
 
 /// --max-gap-s: seconds, finite, above 0 and at most host_sim::kMaxGapLimit_s.
@@ -127,9 +145,15 @@ int run_replay(const ReplayOptions& options) {
                       << (log.box_log ? "a box log: periods at the recorded times, outputs compared"
                                       : "a sensor log: a period every 5 ms")
                       << ")" << std::endl;
+        std::unique_ptr<BoxLogWriter> record;
+        if (!options.record.empty()) record = std::make_unique<BoxLogWriter>(options.record);
         const host_sim::ReplayResult r = host_sim::replay_candump(
-            log, [&](const host_sim::BoxPeriod& p) { observer.observe(p); });
+            log, [&](const host_sim::BoxPeriod& p) { observer.observe(p); },
+            record
+                ? host_sim::ReplayFrameTap([&](const hal::CandumpRecord& f) { record->write(f); })
+                : host_sim::ReplayFrameTap());
         firmware_csv.finish(true);
+        if (record) record->finish();
         const Json box = observer.to_json();
         Json s;
         s["log"] = options.log;
@@ -187,8 +211,9 @@ int run_replay(const ReplayOptions& options) {
                     static_cast<unsigned long long>(
                         recorded["status_frames"].get<std::uint64_t>()));
         }
-        std::printf("wrote %s, %s\n", (dir / "firmware.csv").string().c_str(),
-                    (dir / "summary.json").string().c_str());
+        std::printf("wrote %s, %s%s%s\n", (dir / "firmware.csv").string().c_str(),
+                    (dir / "summary.json").string().c_str(), record ? ", the box log " : "",
+                    options.record.c_str());
         return log.box_log && (r.differing_frames != 0 || r.compared_frames == 0) ? 1 : 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin replay: " << e.what() << "\n";
@@ -231,6 +256,10 @@ void add_replay_command(CLI::App& app) {
                     "refused naming the line (a sensor log runs the box every 5 ms across it)")
         ->check(kGapSeconds)
         ->capture_default_str();
+    cmd->add_option("--record", options->record,
+                    "Also write the replayed box's log: every frame it received and sent, in "
+                    "candump format as `scopekin-box --record` writes it (a box log: "
+                    "`scopekin display` shows it, `scopekin replay` replays it)");
     cmd->add_flag("--quiet", options->quiet, "No progress on stderr");
     cmd->callback([options]() { throw CLI::RuntimeError(run_replay(*options)); });
 }

@@ -15,12 +15,9 @@
 #include "host_sim/simulator/box_observer.hpp"
 #include "host_sim/simulator/firmware_loop.hpp"
 #include "host_sim/simulator/live_simulation.hpp"
-#include "host_sim/simulator/world_readout.hpp"
 #include "host_sim/view/live_view.hpp"
 #include "host_sim/view/view_page.hpp"
 #include "host_sim/view/view_server.hpp"
-#include "model/colon/bundled_colons.hpp"
-#include "model/scope/cf_q160l.hpp"
 
 namespace scopekin::cli {
 namespace {
@@ -28,18 +25,13 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 
-/// The box's page (`run --view`): its colon is the one its reduced model was made in (the
-/// bundled default, model/reduction/training.json).
+/// The box's page (`run --view`).
 std::unique_ptr<view::LiveView> open_box_view(const RunOptions& options) {
-    const model::ColonTube colon = model::default_colon(model::cf_q160l::kRadius_mm);
     auto live_view = std::make_unique<view::LiveView>(
-        view::live_page_data(
-            nlohmann::json::parse(host_sim::WorldReader::colon_json(colon).dump()), 0,
-            "the box: " + fs::path(options.recording).filename().string(),
-            "what the box knows (no truth): its tip along its model's colon, its uncertainty, "
-            "its stations and alarms, from " +
-                options.recording,
-            true),
+        view::box_page_data("the box: " + fs::path(options.recording).filename().string(),
+                            "what the box knows (no truth): its tip along its model's colon, its "
+                            "uncertainty, its stations and alarms, from " +
+                                options.recording),
         options.port);
     std::printf("scopekin run: the box's view at %s\n", live_view->url().c_str());
     std::fflush(stdout);
@@ -163,15 +155,7 @@ int run_recording(const RunOptions& options) {
             box["alarms"].size(), rec.gaps.empty() ? "" : ", flagged: gaps in the handle signals",
             (dir / "firmware.csv").string().c_str(), (dir / "summary.json").string().c_str());
         print_box_faults(s["box"]);
-        if (live_view) {
-            live_view->finish(std::string());
-            std::printf(
-                "scopekin run: the box's view stays at %s (%zu live messages sent; "
-                "Ctrl-C to stop)\n",
-                live_view->url().c_str(), live_view->messages());
-            std::fflush(stdout);
-            live_view->wait_for_stop_signal();
-        }
+        if (live_view) live_view->serve_box_page_until_stopped("scopekin run");
         return 0;
     } catch (const OutputError& e) {
         std::cerr << "scopekin run: " << e.what() << "\n";

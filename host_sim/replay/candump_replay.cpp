@@ -182,8 +182,11 @@ CandumpLog read_candump_log(const std::string& path, const CandumpReadOptions& o
 }
 
 ReplayResult replay_candump(const CandumpLog& log,
-                            const std::function<void(const BoxPeriod&)>& on_period) {
+                            const std::function<void(const BoxPeriod&)>& on_period,
+                            const ReplayFrameTap& on_frame) {
     ReplayResult result;
+    hal::CandumpRecord sent_record{};  // the box's frames as a box log stamps them
+    if (!log.records.empty()) sent_record.interface = log.records.front().interface;
     auto bus = std::make_unique<ReplayCanBus>();
     auto box = std::make_unique<executive::SensorBox>();
     executive::BoxConfig config{};
@@ -195,7 +198,20 @@ ReplayResult replay_candump(const CandumpLog& log,
         bus->sent.clear();
         box->run_period(time_us, 0);
         ++result.periods;
+        if (on_frame) {
+            sent_record.timestamp_us = time_us;
+            for (const hal::CanFrame& f : bus->sent) {
+                sent_record.frame = f;
+                on_frame(sent_record);
+            }
+        }
         if (on_period) on_period({time_us, &box->outputs(), box->box_faults(), box.get()});
+    };
+
+    auto offer = [&](const hal::CandumpRecord& r) {
+        const bool passed = bus->offer(r);
+        ++(passed ? result.frames_fed : result.frames_filtered);
+        if (passed && on_frame) on_frame(r);
     };
 
     std::size_t tracker_shadow = 0;  // periods still carrying a fused tip (see below)
@@ -206,7 +222,7 @@ ReplayResult replay_candump(const CandumpLog& log,
         while (i < n) {
             const hal::CandumpRecord& r = log.records[i];
             if (is_input(r)) {
-                ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
+                offer(r);
                 ++i;
                 continue;
             }
@@ -289,7 +305,7 @@ ReplayResult replay_candump(const CandumpLog& log,
             run(next);
             next += kBoxPeriodUs;
         }
-        ++(bus->offer(r) ? result.frames_fed : result.frames_filtered);
+        offer(r);
     }
     run(next);
     return result;

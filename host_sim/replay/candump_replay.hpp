@@ -77,9 +77,16 @@ struct ReplayResult {
     std::string first_difference;  ///< empty if none
 };
 
-/// Replays the log through a box; `on_period` sees every period (time, outputs).
+/// Every frame the replayed box received (those its filter passed) and sent, in the order of a
+/// box log (`scopekin replay --record`): the received ones as the log stamps them, the sent ones
+/// with their period's time and the log's first interface.
+using ReplayFrameTap = std::function<void(const hal::CandumpRecord&)>;
+
+/// Replays the log through a box; `on_period` sees every period (time, outputs), `on_frame`
+/// (optional) every frame in and out.
 ReplayResult replay_candump(const CandumpLog& log,
-                            const std::function<void(const BoxPeriod&)>& on_period);
+                            const std::function<void(const BoxPeriod&)>& on_period,
+                            const ReplayFrameTap& on_frame = {});
 
 /// True for the ids the box sends.
 bool is_box_output_id(std::uint32_t id);

@@ -1,7 +1,12 @@
 #include "host_sim/view/live_view.hpp"
 
+#include <cstdio>
+
 #include "host_sim/evaluate/estimators.hpp"
+#include "host_sim/simulator/world_readout.hpp"
 #include "host_sim/view/view_page.hpp"
+#include "model/colon/bundled_colons.hpp"
+#include "model/scope/cf_q160l.hpp"
 
 namespace scopekin::view {
 
@@ -36,6 +41,12 @@ Json live_page_data(const Json& colon, std::size_t scope_max_points, const std::
     return data;
 }
 
+Json box_page_data(const std::string& title, const std::string& subtitle) {
+    const model::ColonTube colon = model::default_colon(model::cf_q160l::kRadius_mm);
+    return live_page_data(Json::parse(host_sim::WorldReader::colon_json(colon).dump()), 0, title,
+                          subtitle, true);
+}
+
 LiveView::LiveView(const Json& page_data, std::uint16_t port)
     : server_(render_view_page(page_data, view_assets_folder())) {
     url_ = server_.bind(port);
@@ -58,6 +69,14 @@ void LiveView::send(const std::string& frame) {
     if (!frame.empty()) message += ",\"frame\":" + frame;
     server_.publish(message + "}");
     rows_ = OrderedJson::array();
+}
+
+void LiveView::serve_box_page_until_stopped(const char* program) {
+    finish(std::string());
+    std::printf("%s: the box's view stays at %s (%zu live messages sent; Ctrl-C to stop)\n",
+                program, url_.c_str(), messages());
+    std::fflush(stdout);
+    wait_for_stop_signal();
 }
 
 void LiveView::finish(const std::string& replay_page) {

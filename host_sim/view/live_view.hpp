@@ -33,8 +33,13 @@ public:
     void finish(const std::string& replay_page);
     /// Serves until Ctrl-C (SIGINT or SIGTERM).
     void wait_for_stop_signal() { server_.wait_for_stop_signal(); }
+    /// The box's page at the end of its input: finish() as it is, say so on stdout
+    /// ("PROGRAM: the box's view stays at URL ..."), serve until Ctrl-C.
+    void serve_box_page_until_stopped(const char* program);
     /// Messages sent so far.
     std::size_t messages() const { return server_.published(); }
+    /// A page opened later gets only the last `messages` (0: all; PageServer::set_history_limit).
+    void keep_last(std::size_t messages) { server_.set_history_limit(messages); }
 
 private:
     void send(const std::string& frame);
@@ -51,5 +56,9 @@ private:
 /// knows, no truth; its colon is the one its reduced model was made in.
 nlohmann::json live_page_data(const nlohmann::json& colon, std::size_t scope_max_points,
                               const std::string& title, const std::string& subtitle, bool box_only);
+
+/// The box's live page (`scopekin run --view`, `scopekin display`): box_only, on the colon the
+/// box's reduced model was made in (the bundled default, model/reduction/training.json).
+nlohmann::json box_page_data(const std::string& title, const std::string& subtitle);
 
 }  // namespace scopekin::view

@@ -47,12 +47,15 @@ PageServer::PageServer(std::string page)
         res.set_chunked_content_provider(
             "text/event-stream", [this, next](std::size_t, httplib::DataSink& sink) {
                 std::unique_lock lock(mutex_);
+                const auto end_index = [&] { return first_event_ + events_.size(); };
                 changed_.wait_for(lock, kKeepAlive, [&] {
-                    return *next < events_.size() || events_ended_ || stopping_;
+                    return *next < end_index() || events_ended_ || stopping_;
                 });
+                // A client that joins (or falls) behind the kept history starts at its oldest.
+                if (*next < first_event_) *next = first_event_;
                 std::string chunk;
-                while (*next < events_.size())
-                    chunk += "data: " + events_[(*next)++] + "\n\n";
+                while (*next < end_index())
+                    chunk += "data: " + events_[(*next)++ - first_event_] + "\n\n";
                 const bool end = events_ended_ || stopping_;
                 lock.unlock();
                 if (chunk.empty()) chunk = ": keep-alive\n\n";
@@ -91,6 +94,10 @@ void PageServer::publish(std::string message) {
     {
         const std::lock_guard lock(mutex_);
         events_.push_back(std::move(message));
+        while (history_limit_ > 0 && events_.size() > history_limit_) {
+            events_.pop_front();
+            ++first_event_;
+        }
     }
     changed_.notify_all();
 }
@@ -105,7 +112,12 @@ void PageServer::end_events() {
 
 std::size_t PageServer::published() const {
     const std::lock_guard lock(mutex_);
-    return events_.size();
+    return first_event_ + events_.size();
+}
+
+void PageServer::set_history_limit(std::size_t messages) {
+    const std::lock_guard lock(mutex_);
+    history_limit_ = messages;
 }
 
 std::string PageServer::bind(std::uint16_t port) {

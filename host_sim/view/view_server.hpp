@@ -5,12 +5,12 @@
 // as without the view), afterwards they end wait_for_stop_signal().
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
-#include <vector>
 
 namespace httplib {
 class Server;
@@ -47,13 +47,18 @@ public:
     void wait_for_stop_signal();
     /// How many messages have been published.
     std::size_t published() const;
+    /// Keep only the last `messages` for clients that connect later (0: all, the default): a
+    /// display that runs for hours (`scopekin display --can`) must not grow without bound.
+    void set_history_limit(std::size_t messages);
 
 private:
     std::unique_ptr<httplib::Server> server_;
     mutable std::mutex mutex_;
     std::condition_variable changed_;
     std::string page_;
-    std::vector<std::string> events_;
+    std::deque<std::string> events_;
+    std::size_t first_event_ = 0;    ///< the index of events_.front() among all published
+    std::size_t history_limit_ = 0;  ///< 0: keep all
     bool events_ended_ = false;
     bool stopping_ = false;
     bool graceful_stop_ = false;

@@ -257,3 +257,33 @@ TEST(CandumpReplay, AFloodOfForeignFramesChangesNoOutput) {
     EXPECT_EQ(b.frames_filtered, 3000U * 100U);
     EXPECT_EQ(a.frames_filtered, 0U);
 }
+
+TEST(CandumpReplay, ItsRecordIsABoxLogThatReplaysToTheSameFrames) {
+    // `scopekin replay --record`: what the replayed box received (the frames its filter passed)
+    // and sent, in a box log's order; replayed as a box log, every output frame compares equal.
+    const host_sim::CandumpLog sensors = sensor_log(1000, 2);
+    host_sim::CandumpLog record;
+    record.box_log = true;
+    const host_sim::ReplayResult first =
+        host_sim::replay_candump(sensors, nullptr, [&](const hal::CandumpRecord& r) {
+            record.records.push_back(r);
+            record.lines.push_back(record.records.size());
+        });
+    std::size_t estimates = 0, foreign = 0, received = 0;
+    std::uint64_t previous_us = 0;
+    for (const hal::CandumpRecord& r : record.records) {
+        EXPECT_GE(r.timestamp_us, previous_us) << "a box log is in time order";
+        previous_us = r.timestamp_us;
+        EXPECT_STREQ(r.interface.data(), "can0");
+        if (r.frame.id == protocol::kKineticEstimateId) ++estimates;
+        if (r.frame.id >= 0x300U) ++foreign;
+        if (host_sim::is_input(r)) ++received;
+    }
+    EXPECT_EQ(estimates, first.periods);  // one KineticEstimate per period
+    EXPECT_EQ(foreign, 0U);               // the filter held them back, as the kernel would
+    EXPECT_EQ(received, first.frames_fed);
+    const host_sim::ReplayResult again = host_sim::replay_candump(record, nullptr);
+    EXPECT_EQ(again.periods, first.periods);
+    EXPECT_GT(again.compared_frames, 4U * first.periods);
+    EXPECT_EQ(again.differing_frames, 0U) << again.first_difference;
+}

@@ -1,19 +1,20 @@
-// The box's own page (`scopekin run RECORDING --view`) in a real browser (Debian's chromium,
-// headless, puppeteer-core): while the recording goes through the firmware at --pace, the page
-// receives the box's outputs (messages and the cursor's time advance), shows only what the box
-// knows (no truth series, no true tip, no scope shape), without console errors; SIGTERM ends run
-// with 0. Screenshot into OUT.
+// The box's own page in a real browser (Debian's chromium, headless, puppeteer-core), from
+// `scopekin run RECORDING --view` (the recording through the firmware at --pace) or `scopekin
+// display BOX_LOG` (the box's CAN frames at --pace): while it goes, the page receives the box's
+// outputs (messages and the cursor's time advance), shows only what the box knows (no truth
+// series, no true tip, no scope shape), without console errors; SIGTERM ends the command with 0.
+// Screenshot OUT/NAME.png.
 //
-// node view_box_test.cjs SCOPEKIN RECORDING RUN_DIR OUT CHROMIUM   (NODE_PATH: node_modules)
+// node view_box_test.cjs OUT CHROMIUM NAME COMMAND [ARGS...]   (NODE_PATH: node_modules)
 'use strict';
 const { spawn } = require('node:child_process');
 const fs = require('node:fs');
 const path = require('node:path');
 const { checks, launchChromium, newPage } = require('./browser_support.cjs');
 
-const [scopekin, recording, runDir, outDir, chromium] = process.argv.slice(2);
-if (!chromium) {
-  console.error('usage: node view_box_test.cjs SCOPEKIN RECORDING RUN_DIR OUT CHROMIUM');
+const [outDir, chromium, shotName, command, ...commandArgs] = process.argv.slice(2);
+if (!command) {
+  console.error('usage: node view_box_test.cjs OUT CHROMIUM NAME COMMAND [ARGS...]');
   process.exit(2);
 }
 fs.mkdirSync(outDir, { recursive: true });
@@ -21,9 +22,8 @@ const { expect, finish } = checks();
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 (async () => {
-  // 20 s of recording as the box lived it (--pace 1): 20 s to watch it.
-  const run = spawn(scopekin, ['run', recording, '--out', runDir, '--view', '--no-browser', '--port', '0', '--pace', '1', '--quiet'],
-    { stdio: ['ignore', 'pipe', 'inherit'] });
+  // Paced as the box lived it (--pace 1): the recording's seconds to watch it.
+  const run = spawn(command, commandArgs, { stdio: ['ignore', 'pipe', 'inherit'] });
   let out = '';
   run.stdout.on('data', (d) => { out += d; });
   const exited = new Promise((r) => run.on('exit', (code) => r(code)));
@@ -52,16 +52,16 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
     });
     expect(knows.boxOnly && knows.boxTip, 'the page is the box\'s, with the box\'s tip');
     expect(!knows.truth && !knows.trueTipShown && knows.scope === 0, `no truth on it (truth series ${knows.truth}, true tip shown ${knows.trueTipShown}, shapes ${knows.scope})`);
-    await page.screenshot({ path: path.join(outDir, 'box.png') });
+    await page.screenshot({ path: path.join(outDir, `${shotName}.png`) });
     for (let waited = 0; !/stays at/.test(out) && waited < 120000; waited += 200) await sleep(200);
-    expect(/stays at/.test(out), 'run says when the recording has gone through');
+    expect(/stays at/.test(out), 'it says when the recording has gone through');
     expect(errors.length === 0, `no console errors${errors.length ? `: ${errors.join(' | ')}` : ''}`);
   } finally {
     await browser.close();
     run.kill('SIGTERM');
   }
   const code = await exited;
-  expect(code === 0, `run ends with 0 on SIGTERM (${code})`);
+  expect(code === 0, `it ends with 0 on SIGTERM (${code})`);
   finish();
 })().catch((e) => {
   console.error(`FAIL ${e.stack || e}`);
