@@ -136,7 +136,10 @@ struct Outputs {
     bool self_lock_alarm{false};
     bool model_self_lock_alarm{false};  ///< the reduced model's self-lock monitor
     Q16_16 loop_score{};  ///< the loop alarm's score (0 without its trees; evidence_alarm.hpp)
+    /// The contact-force level on the published largest force (max_contact_force_N).
     ContactForceLevel contact_force_level{ContactForceLevel::normal};
+    /// The same monitor on the reduced model's largest force (model_max_contact_force_N).
+    ContactForceLevel model_contact_force_level{ContactForceLevel::normal};
     std::uint32_t fault_flags{0};
 };
 

@@ -187,6 +187,7 @@ static void cut_where_the_scope_went_through_the_wall(CaseRun& run, double lost_
     cut(run.box_self_lock);
     cut(run.box_model_self_lock);
     cut(run.box_contact_level);
+    cut(run.box_model_contact_level);
     cut(run.box_fault_flags);
     cut(run.handle_force_N);
     cut(run.handle_torque_Nmm);
@@ -263,6 +264,10 @@ CaseRun read_case_run(const fs::path& folder) {
     // the published alarm was the model's.
     const bool loop_alarm = has_column(fw_file, "model_self_lock_alarm");
     if (loop_alarm) fw_columns.emplace_back("model_self_lock_alarm");
+    // model_contact_force_level: written since the contact-force level from evidence
+    // (2026-11-30); before it the published level was the model's.
+    const bool level_from_evidence = has_column(fw_file, "model_contact_force_level");
+    if (level_from_evidence) fw_columns.emplace_back("model_contact_force_level");
     const Columns fw = read_columns(fw_file, fw_columns);
     if (truth.lines.size() != fw.lines.size())
         throw CaseDataError(truth_file.string() + " has " + std::to_string(truth.lines.size()) +
@@ -289,13 +294,21 @@ CaseRun read_case_run(const fs::path& folder) {
     } else {  // before the tip observer the published tip was the model's
         run.box_model_tip_path_mm = run.box_tip_path_mm;
     }
-    const std::size_t force_column = fw_columns.size() - (loop_alarm ? 2U : 1U);
+    const auto column = [&](const char* name) {
+        return static_cast<std::size_t>(std::find(fw_columns.begin(), fw_columns.end(), name) -
+                                        fw_columns.begin());
+    };
     run.box_model_max_contact_force_N =
-        force_trees ? numbers(fw, force_column, fw_file, "model_max_contact_force_N")
-                    : run.box_max_contact_force_N;
-    run.box_model_self_lock = loop_alarm ? whole<std::uint8_t>(fw, fw_columns.size() - 1U, fw_file,
-                                                               "model_self_lock_alarm")
+        force_trees
+            ? numbers(fw, column("model_max_contact_force_N"), fw_file, "model_max_contact_force_N")
+            : run.box_max_contact_force_N;
+    run.box_model_self_lock = loop_alarm ? whole<std::uint8_t>(fw, column("model_self_lock_alarm"),
+                                                               fw_file, "model_self_lock_alarm")
                                          : run.box_self_lock;
+    run.box_model_contact_level = level_from_evidence
+                                      ? whole<std::uint8_t>(fw, column("model_contact_force_level"),
+                                                            fw_file, "model_contact_force_level")
+                                      : run.box_contact_level;
     for (std::size_t k = 1; k < run.time_s.size(); ++k)
         if (!(run.time_s[k] > run.time_s[k - 1]))
             throw CaseDataError(truth_file.string() + ": line " + std::to_string(truth.lines[k]) +

@@ -68,6 +68,10 @@ struct CaseRun {
     /// the loop alarm from evidence lack it, and their published alarm was the model's.
     std::vector<std::uint8_t> box_model_self_lock;
     std::vector<std::uint8_t> box_contact_level;
+    /// The reduced model's contact-force level (column model_contact_force_level); runs written
+    /// before the level from evidence (2026-11-30) lack it, and their published level was the
+    /// model's.
+    std::vector<std::uint8_t> box_model_contact_level;
     std::vector<std::uint32_t> box_fault_flags;
     // recording.csv: the handle force and insertion the box received, at each period (the last
     // sample at or before the period's time; NaN before the first)

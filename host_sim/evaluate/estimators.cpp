@@ -10,8 +10,8 @@ namespace {
 /// (a) The box as it is: firmware.csv's published outputs — its tip (the reduced model's while
 /// the handle's evidence trusts it, else the slack regressor's) and its uncertainty; the largest
 /// contact force (likewise the model's or the contact force trees'); the loop alarm (likewise the
-/// model's self-lock or the loop alarm from evidence); the contact-force level and the faults
-/// from the reduced model.
+/// model's self-lock or the loop alarm from evidence); the contact-force level on that published
+/// force (the reduced model's in runs written before 2026-11-30); the faults.
 EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     EstimatorOutput o;
     o.tip_path_mm = run.box_tip_path_mm;
@@ -23,15 +23,17 @@ EstimatorOutput box(const CaseRun& run, const EstimatorContext&) {
     return o;
 }
 
-/// (b) The depth replay: the reduced model's own tip, largest force and self-lock alarm
-/// (firmware.csv model_tip_path_mm, model_max_contact_force_N, model_self_lock_alarm: the box's
-/// published ones until the tip observer, the contact force trees and the loop alarm from
-/// evidence); its contact-force level is the box's (a), which is the model's.
+/// (b) The depth replay: the reduced model's own tip, largest force, self-lock alarm and
+/// contact-force level (firmware.csv model_tip_path_mm, model_max_contact_force_N,
+/// model_self_lock_alarm, model_contact_force_level: the box's published ones until the tip
+/// observer, the contact force trees, the loop alarm from evidence and the level from evidence);
+/// the box's faults.
 EstimatorOutput depth_replay(const CaseRun& run, const EstimatorContext& context) {
     EstimatorOutput o = box(run, context);
     o.tip_path_mm = run.box_model_tip_path_mm;
     o.max_force_N = run.box_model_max_contact_force_N;
     o.loop_alarm = run.box_model_self_lock;
+    o.contact_level = run.box_model_contact_level;
     o.tip_uncertainty_mm.clear();
     return o;
 }
@@ -96,7 +98,7 @@ const std::vector<Estimator>& estimator_registry() {
     static const std::vector<Estimator> registry{
         {"box",
          "the box (slack regressor, contact force trees and loop alarm from evidence; the model's "
-         "where the handle agrees with it; contact-force level from the reduced model; with the "
+         "where the handle agrees with it; contact-force level on its published force; with the "
          "bench's EM tracker: the tip odometer and the loop alarm's slack gate)",
          box},
         {"depth_replay", "depth replay (the reduced model's tip, force and alarms)", depth_replay},

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 #include "host_sim/evaluate/scoring.hpp"
 #include "host_sim/recording/recording_format.hpp"
@@ -54,6 +55,35 @@ Json within_sd_json(const std::vector<double>& estimate, const std::vector<doubl
         if (error <= 2.0 * sd[k]) ++two;
     }
     return {{"periods", periods}, {"within_1_sd", one}, {"within_2_sd", two}};
+}
+
+/// The contact-force level against the truth's largest force period by period: the periods with
+/// the truth at or above each threshold (10 N, 14 N) and those the level was up in, and the
+/// periods with the truth below 90 % of it (the monitor's clear level) and those it was up in.
+/// An alarm held through a long hard push is counted in every period it is right, which the
+/// episodes' onsets (score_alarm) do not see.
+Json level_periods_json(const std::vector<std::uint8_t>& level, const std::vector<double>& truth) {
+    Json out = Json::object();
+    for (const auto& [name, threshold_N, at_least] :
+         {std::tuple{"warning_10N", 10.0, 1}, std::tuple{"critical_14N", 14.0, 2}}) {
+        std::size_t over = 0, up_over = 0, below = 0, up_below = 0;
+        for (std::size_t k = 0; k < level.size() && k < truth.size(); ++k) {
+            if (std::isnan(truth[k])) continue;
+            const bool up = level[k] >= at_least;
+            if (truth[k] >= threshold_N) {
+                ++over;
+                if (up) ++up_over;
+            } else if (truth[k] < 0.9 * threshold_N) {
+                ++below;
+                if (up) ++up_below;
+            }
+        }
+        out[name] = {{"periods_over", over},
+                     {"up_over", up_over},
+                     {"periods_below", below},
+                     {"up_below", up_below}};
+    }
+    return out;
 }
 
 Json error_json(const ErrorScore& e) {
@@ -179,6 +209,10 @@ Json score_case(const std::string& name, const std::string& style, const std::st
                 alarm_json(score_alarm(run.time_s, warning, run.warning_episodes, kPeriod_s));
             j["critical_alarm"] =
                 alarm_json(score_alarm(run.time_s, critical, run.critical_episodes, kPeriod_s));
+            j["contact_level_periods"] =
+                o.contact_level.empty()
+                    ? Json()
+                    : level_periods_json(o.contact_level, run.true_max_station_force_N);
             if (o.fault_flags.empty()) {
                 j["fault_share"] = nullptr;
             } else {
@@ -291,6 +325,29 @@ Json aggregate(const std::vector<Json>& cases) {
                                              : Json{{"periods", sd_periods},
                                                     {"within_1_sd_share", sd_share(sd_one)},
                                                     {"within_2_sd_share", sd_share(sd_two)}};
+        Json level_periods = Json::object();
+        for (const char* level : {"warning_10N", "critical_14N"}) {
+            std::size_t over = 0, up_over = 0, below = 0, up_below = 0;
+            for (const Json& c : cases) {
+                if (!c.contains("estimators") || !c["estimators"].contains(e.name)) continue;
+                const Json& l =
+                    member(member(c["estimators"][e.name], "contact_level_periods"), level);
+                if (!l.is_object()) continue;
+                over += l.value("periods_over", std::size_t{0});
+                up_over += l.value("up_over", std::size_t{0});
+                below += l.value("periods_below", std::size_t{0});
+                up_below += l.value("up_below", std::size_t{0});
+            }
+            const auto share = [](std::size_t n, std::size_t of) {
+                return num(of > 0 ? static_cast<double>(n) / static_cast<double>(of) : kNaN);
+            };
+            if (over + below > 0)
+                level_periods[level] = {{"periods_over", over},
+                                        {"up_over_share", share(up_over, over)},
+                                        {"periods_below", below},
+                                        {"up_below_share", share(up_below, below)}};
+        }
+        j["contact_level_periods"] = level_periods.empty() ? Json() : level_periods;
         j["tip_error_rms_mm"] = distribution_json(tip_rms);
         j["tip_error_max_mm"] = distribution_json(tip_max);
         j["force_error_rms_N"] = distribution_json(force_rms);
@@ -591,6 +648,21 @@ std::string scorecard_markdown(const Json& overall, const std::string& manifest_
         md << "\n";
         dist_row(kind.title + std::string(": up after the episode ends [s]"),
                  [&](const Json& e) -> const Json& { return e[key]["linger_s"]; });
+        const char* level = key == "warning_alarm"    ? "warning_10N"
+                            : key == "critical_alarm" ? "critical_14N"
+                                                      : nullptr;
+        if (level == nullptr) continue;
+        md << "| " << kind.title
+           << ": up in the periods the truth is over it / under 90 % of it (pooled) |";
+        for (const Json& e : estimators) {
+            const Json& l = member(member(e, "contact_level_periods"), level);
+            if (!l.is_object())
+                md << " n/a |";
+            else
+                md << " " << fmt(100.0 * get(l, "up_over_share"), "%.0f") << " / "
+                   << fmt(100.0 * get(l, "up_below_share"), "%.0f") << " % |";
+        }
+        md << "\n";
     }
     // Fault flags set in any period.
     for (const std::string& flag : fault_flag_names()) {

@@ -34,7 +34,7 @@ std::string firmware_csv_header() {
            ",box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
            "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm,"
            "max_contact_force_uncertainty_N,model_max_contact_force_N,model_self_lock_alarm,"
-           "loop_score,tip_from_tracker";
+           "loop_score,tip_from_tracker,model_contact_force_level";
 }
 
 std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
@@ -74,6 +74,7 @@ std::string firmware_csv_row(std::uint64_t time_us, const kinetics::Outputs& o,
     put_u(line, o.model_self_lock_alarm ? 1U : 0U);
     put_q(line, o.loop_score);
     put_u(line, o.tip_from_tracker ? 1U : 0U);
+    put_u(line, static_cast<std::uint64_t>(o.model_contact_force_level));
     return line;
 }
 

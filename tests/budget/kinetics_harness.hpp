@@ -98,7 +98,7 @@ constexpr std::size_t aggregate_field_count() noexcept {
 
 }  // namespace detail
 
-static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 23U,
+static_assert(detail::aggregate_field_count<kinetics::Outputs>() == 24U,
               "kinetics::Outputs changed: hash every field in hash_outputs(), then update this "
               "count and regenerate the golden hashes (tests/firmware/data/README.md)");
 static_assert(detail::aggregate_field_count<kinetics::StationEstimate>() == 5U,
@@ -140,6 +140,7 @@ constexpr void hash_outputs(Fnv1a64& hash, const kinetics::Outputs& outputs) noe
     hash.boolean(outputs.model_self_lock_alarm);
     hash.q16(outputs.loop_score);
     hash.enumeration(outputs.contact_force_level);
+    hash.enumeration(outputs.model_contact_force_level);
     hash.u32(outputs.fault_flags);
 }
 

@@ -267,3 +267,50 @@ SCOPEKIN_TEST(ContactForceTrees, TheyNeedSlackTreesOfTheSameAverages) {
     kin::init(config, g_state);
     SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
 }
+
+SCOPEKIN_TEST(ContactForceTrees, ThePublishedLevelReadsThePublishedForceAfter20Steps) {
+    // base 8 N: 8 - 1 + 4 = 11 N up to 100 mm, 8 + 3 + 4 = 15 N beyond (11 N of push). The
+    // published level reads that force and rises after 20 steps at or above a threshold: the
+    // warning at the 20th step from 20 mm (39 mm), the critical level at the 20th step from
+    // 101 mm (120 mm), not one step before. The model's own level reads the model's force.
+    static const SlackTrees slack = hand_built();
+    static const SlackTrees force = force_trees(8);
+    kin::Config config = kin::default_config();
+    config.slack_trees = &slack;
+    config.contact_force_trees = &force;
+    config.loop_alarm_trees = nullptr;
+    kin::init(config, g_state);
+    SCOPEKIN_EXPECT_TRUE(g_state.config_fault == kin::ConfigFault::none);
+    kin::Inputs in{};
+    in.handle_force_N = Q16_16::from_int(11);
+    in.fresh_mask = kin::kAllInputSignals;
+    const auto level_at = [&](int depth_mm) {
+        in.insertion_mm = Q16_16::from_int(depth_mm);
+        kin::step(in, g_state, g_out);
+        return g_out.contact_force_level;
+    };
+    bool model_level_as_its_force = true;
+    for (int d = 20; d <= 150; ++d) {
+        const kin::ContactForceLevel level = level_at(d);
+        if (d == 38) {
+            SCOPEKIN_EXPECT_TRUE(level == kin::ContactForceLevel::normal);
+        } else if (d == 39 || d == 119) {
+            SCOPEKIN_EXPECT_TRUE(level == kin::ContactForceLevel::warning);
+        } else if (d == 120) {
+            SCOPEKIN_EXPECT_TRUE(level == kin::ContactForceLevel::critical);
+        }
+        // The model's monitor raises on the first step (persistence 1): below 9 N it is normal.
+        if (g_out.model_max_contact_force_N < Q16_16::from_int(9) &&
+            g_out.model_contact_force_level != kin::ContactForceLevel::normal)
+            model_level_as_its_force = false;
+    }
+    SCOPEKIN_EXPECT_TRUE(!g_out.tip_from_model);
+    SCOPEKIN_EXPECT_EQ(g_out.max_contact_force_N.raw(), 15 * kOne);
+    SCOPEKIN_EXPECT_TRUE(g_out.contact_force_level == kin::ContactForceLevel::critical);
+    SCOPEKIN_EXPECT_TRUE(model_level_as_its_force);
+    // A published force of 0 N (base -20 N) keeps the level normal whatever the model says.
+    static const SlackTrees pulling = force_trees(-20);
+    config.contact_force_trees = &pulling;
+    advance_to_150_mm_at_11_N(config);
+    SCOPEKIN_EXPECT_TRUE(g_out.contact_force_level == kin::ContactForceLevel::normal);
+}

@@ -468,7 +468,8 @@ def check_bom_and_long_lines():
 NEW_FIRMWARE_COLUMNS = ["box_faults", "tracker_faults", "tip_uncertainty_mm", "model_tip_path_mm",
                         "model_log_likelihood_ratio", "tip_from_model", "observer_tip_path_mm",
                         "max_contact_force_uncertainty_N", "model_max_contact_force_N",
-                        "model_self_lock_alarm", "loop_score", "tip_from_tracker"]
+                        "model_self_lock_alarm", "loop_score", "tip_from_tracker",
+                        "model_contact_force_level"]
 
 
 def check_box_faults():
@@ -563,8 +564,8 @@ def check_box_faults():
     sim_dir = os.path.dirname(rec)
     fw = rows(os.path.join(sim_dir, "firmware.csv"))
     header = open(os.path.join(sim_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-12:] == NEW_FIRMWARE_COLUMNS,
-           f"the new columns come last: {header[-12:]}")
+    expect(header[-len(NEW_FIRMWARE_COLUMNS):] == NEW_FIRMWARE_COLUMNS,
+           f"the new columns come last: {header[-len(NEW_FIRMWARE_COLUMNS):]}")
     expect(header[:13] == ["time_s", "step_index", "tip_path_mm", "tip_velocity_mm_per_s", "advance_efficiency",
                            "active_stations", "max_contact_force_N", "max_contact_station", "max_contact_path_mm",
                            "distal_sticking", "self_lock_alarm", "contact_force_level", "fault_flags"],
@@ -575,8 +576,8 @@ def check_box_faults():
     run_dir = os.path.join(d, "run")
     run("run", rec, "--out", run_dir, "--quiet")
     header = open(os.path.join(run_dir, "firmware.csv")).readline().strip().split(",")
-    expect(header[-12:] == NEW_FIRMWARE_COLUMNS,
-           f"run's firmware.csv ends with the new columns: {header[-12:]}")
+    expect(header[-len(NEW_FIRMWARE_COLUMNS):] == NEW_FIRMWARE_COLUMNS,
+           f"run's firmware.csv ends with the new columns: {header[-len(NEW_FIRMWARE_COLUMNS):]}")
     s = json.load(open(os.path.join(run_dir, "summary.json")))
     expect(s.get("box", {}).get("counters", {}).get("periods") == len(rows(os.path.join(run_dir, "firmware.csv"))),
            f"run's box section counts its periods: {str(s.get('box'))[:300]}")

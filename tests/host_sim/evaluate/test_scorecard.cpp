@@ -110,5 +110,37 @@ TEST(Scorecard, CsvRowsHaveTheHeadersCellsScoredOrNot) {
     }
 }
 
+TEST(Scorecard, TheContactLevelIsScoredPeriodByPeriod) {
+    // Ten periods of a true largest force and a level; >= 10 N in 5 periods (all with the level
+    // up), under 9 N in 4 (up in 1); >= 14 N in 3 (critical in all 3), under 12.6 N in 6 (none).
+    CaseRun run;
+    run.status = "complete";
+    for (int k = 1; k <= 10; ++k)
+        run.time_s.push_back(0.005 * k);
+    run.true_max_station_force_N = {5, 5, 9.5, 12, 14, 15, 15, 13, 8, 5};
+    run.true_tip_path_mm.assign(10, 0.0);
+    EstimatorOutput o;
+    o.loop_alarm.assign(10, 0);
+    o.contact_level = {0, 0, 0, 1, 2, 2, 2, 2, 1, 0};
+    const std::vector<EstimatorOutput> outputs(estimator_registry().size(), o);
+    const Json c = score_case("a", "careful_expert", "cases/a", run, outputs);
+    const Json& p = c["estimators"]["box"]["contact_level_periods"];
+    EXPECT_EQ(p["warning_10N"],
+              Json({{"periods_over", 5}, {"up_over", 5}, {"periods_below", 4}, {"up_below", 1}}));
+    EXPECT_EQ(p["critical_14N"],
+              Json({{"periods_over", 3}, {"up_over", 3}, {"periods_below", 6}, {"up_below", 0}}));
+    const Json o2 = aggregate({c, c});
+    const Json& pooled = o2["estimators"][0]["contact_level_periods"]["warning_10N"];
+    EXPECT_EQ(pooled["periods_over"], 10);
+    EXPECT_DOUBLE_EQ(pooled["up_over_share"].get<double>(), 1.0);
+    EXPECT_DOUBLE_EQ(pooled["up_below_share"].get<double>(), 0.25);
+    const std::string md = scorecard_markdown(o2, "set", "");
+    EXPECT_NE(
+        md.find(
+            "up in the periods the truth is over it / under 90 % of it (pooled) | 100 / 25 % |"),
+        std::string::npos)
+        << md;
+}
+
 }  // namespace
 }  // namespace scopekin::evaluate

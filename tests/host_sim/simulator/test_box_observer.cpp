@@ -69,17 +69,17 @@ TEST(BoxObserver, BoxFaultBitsAreCountedWithTheirFirstTime) {
 
     const auto lines = lines_of(csv.str());
     ASSERT_EQ(lines.size(), 7U);
-    // box_faults, tracker_faults, then the ten columns added after them (zero outputs here).
-    EXPECT_EQ(last_cells(lines[0], 12),
+    // box_faults, tracker_faults, then the eleven columns added after them (zero outputs here).
+    EXPECT_EQ(last_cells(lines[0], 13),
               "box_faults,tracker_faults,tip_uncertainty_mm,model_tip_path_mm,"
               "model_log_likelihood_ratio,tip_from_model,observer_tip_path_mm,"
               "max_contact_force_uncertainty_N,model_max_contact_force_N,model_self_lock_alarm,"
-              "loop_score,tip_from_tracker");
-    const std::string zeros = ",0.00000,0.00000,0.00000,0,0.00000,0.00000,0.00000,0,0.00000,0";
-    EXPECT_EQ(last_cells(lines[1], 12), "0,0" + zeros);
-    EXPECT_EQ(last_cells(lines[2], 12), "64,0" + zeros);
-    EXPECT_EQ(last_cells(lines[3], 12), "16448,0" + zeros);  // 64 + 16384
-    EXPECT_EQ(last_cells(lines[6], 12), "0,0" + zeros);
+              "loop_score,tip_from_tracker,model_contact_force_level");
+    const std::string zeros = ",0.00000,0.00000,0.00000,0,0.00000,0.00000,0.00000,0,0.00000,0,0";
+    EXPECT_EQ(last_cells(lines[1], 13), "0,0" + zeros);
+    EXPECT_EQ(last_cells(lines[2], 13), "64,0" + zeros);
+    EXPECT_EQ(last_cells(lines[3], 13), "16448,0" + zeros);  // 64 + 16384
+    EXPECT_EQ(last_cells(lines[6], 13), "0,0" + zeros);
 }
 
 TEST(BoxObserver, TheBoxSectionCarriesTheBoxCountersAndItsTrackerFaults) {
