@@ -125,7 +125,9 @@ void add_view_command(CLI::App& app) {
         "Ctrl-C, or writes it as one self-contained file with --export. Exit status 0 done, 2 "
         "no run in DIR, a malformed or truncated file, the port in use, or the page's scripts "
         "not built, 3 the exported file cannot be written.");
-    cmd->add_option("folder", options->folder, "The run's folder")->required();
+    cmd->add_option("folder", options->folder,
+                    "A run's, an evaluation's or a discrepancy report's folder")
+        ->required();
     cmd->add_option("--port", options->port, "Port on 127.0.0.1 (0: any free one; default 8765)")
         ->default_val(8765)
         ->check(CLI::Range(0, 65535));
