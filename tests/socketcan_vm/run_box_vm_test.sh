@@ -14,9 +14,13 @@
 #     1. 30 s of traffic without a silence (stopped after the faults); 2. box_faults_on_vcan.sh:
 #     the interface down, a full
 #     send queue, the tracker unplugged and back, the wall clock stepped; 3. check_box_faults.py.
+#   display (socketcan_vm.scopekin_display): 4 s of traffic; scopekin-box and `scopekin display
+#     --can vcan0` beside it (display_on_vcan.sh); busybox wget reads the page and the stream;
+#     check_display_run.py.
 # Both print the box's build (sanitizers), its overruns and the kernel's drops, and the time.
-# usage: run_box_vm_test.sh traffic|faults PYTHON3 DBC OUT_DIR CACHE VM_TIMEOUT_S SCOPEKIN_BOX
-#                           SCOPEKIN_VM_PEER CANPLAYER CANDUMP CANSEND TC SCOPEKIN
+# usage: run_box_vm_test.sh traffic|faults|display PYTHON3 DBC OUT_DIR CACHE VM_TIMEOUT_S
+#                           SCOPEKIN_BOX SCOPEKIN_VM_PEER CANPLAYER CANDUMP CANSEND TC SCOPEKIN
+#                           [VIEW_ASSETS]
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 scenario=$1 python3=$2 dbc=$3 out=$4 cache=$5 vm_timeout=$6 box=$7 peer=$8 canplayer=$9
@@ -50,8 +54,21 @@ case $scenario in
     echo "VM run (boot, ~9 s of traffic and faults, file transfer): ${SECONDS} s"
     "$python3" "$here/check_box_faults.py" "$out" "$dbc" "$work/sent.json"
     ;;
+  display)
+    # scopekin display --can vcan0 beside the box: 4 s of traffic; the page's scripts (argument 14)
+    # go to the guest, as the view's build folder is not there.
+    assets=${14}
+    "$python3" "$here/make_handle_log.py" "$dbc" "$work/handle.log" --duration 4 --gap 0 > "$work/sent.json"
+    # Without its debug sections (the sanitizer build's is ~200 MB: more than the initramfs holds).
+    strip --strip-debug -o "$work/scopekin" "$scopekin"
+    bash "$here/vm_run.sh" "${common[@]}" --memory 1024 --script "$here/display_on_vcan.sh" \
+      --bin "$canplayer" --bin "$work/scopekin:scopekin" --file "$work/handle.log:/scopekin/handle.log" \
+      --file "$assets:/scopekin/assets"
+    echo "VM run (boot, 4 s of traffic, the display read, file transfer): ${SECONDS} s"
+    "$python3" "$here/check_display_run.py" "$out" 4
+    ;;
   *)
-    echo "run_box_vm_test.sh: unknown scenario '$scenario' (traffic or faults)" >&2
+    echo "run_box_vm_test.sh: unknown scenario '$scenario' (traffic, faults or display)" >&2
     exit 2
     ;;
 esac
