@@ -16,6 +16,7 @@
 #include <iostream>
 #include <limits>
 #include <system_error>
+#include <thread>
 
 #include "model/io/strict_json.hpp"
 
@@ -40,6 +41,16 @@ void rename_part(const fs::path& part, const fs::path& target) {
 }
 
 }  // namespace
+
+void keep_pace(std::int64_t t_us, std::int64_t first_us, double pace,
+               std::chrono::steady_clock::time_point wall_start) {
+    if (!(pace > 0)) return;
+    const auto due =
+        wall_start +
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+            std::chrono::duration<double>(static_cast<double>(t_us - first_us) * 1e-6 / pace));
+    std::this_thread::sleep_until(due);
+}
 
 PartFile::PartFile(fs::path final_path, fs::path incomplete_path)
     : final_(std::move(final_path)),

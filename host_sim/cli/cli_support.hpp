@@ -7,6 +7,7 @@
 // all. So a folder whose summary is missing holds an unfinished (killed) run, and a file under its
 // final name is never a truncated one.
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -61,6 +62,11 @@ private:
     int last_decile_ = 0;
     std::chrono::steady_clock::time_point last_draw_{};
 };
+
+/// Waits until a recorded time `t_us` (first recorded time `first_us`) is due at `pace` recorded
+/// seconds per wall second from `wall_start` (pace 0: at once): `run --view`, `display LOG`.
+void keep_pace(std::int64_t t_us, std::int64_t first_us, double pace,
+               std::chrono::steady_clock::time_point wall_start);
 
 /// Creates `dir` (OutputError if impossible) and removes the given old outputs in it, each
 /// NAME and NAME.part, in the order given: list the summary first, so that no old summary stays

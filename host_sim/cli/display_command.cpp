@@ -100,10 +100,8 @@ int display_log(const DisplayOptions& options) {
     for (std::size_t i = 0; i < log.records.size(); ++i) {
         const hal::CandumpRecord& r = log.records[i];
         const double t = static_cast<double>(r.timestamp_us - first_us) * 1e-6;
-        if (options.pace > 0)
-            std::this_thread::sleep_until(
-                wall_start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                 std::chrono::duration<double>(t / options.pace)));
+        keep_pace(static_cast<std::int64_t>(r.timestamp_us), static_cast<std::int64_t>(first_us),
+                  options.pace, wall_start);
         rows.feed(r.timestamp_us, r.frame);
         if (i % 2000 == 0 && end_s > 0) {
             char text[64];

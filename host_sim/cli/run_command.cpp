@@ -6,7 +6,6 @@
 #include <iostream>
 #include <memory>
 #include <string>
-#include <thread>
 
 #include "host_sim/cli/cli_support.hpp"
 #include "host_sim/cli/live_run.hpp"
@@ -37,17 +36,6 @@ std::unique_ptr<view::LiveView> open_box_view(const RunOptions& options) {
     std::fflush(stdout);
     if (!options.no_browser) view::open_in_browser(live_view->url());
     return live_view;
-}
-
-/// Waits until the recording's time `t_us` is due at `pace` recorded seconds per wall second.
-void keep_pace(std::int64_t t_us, std::int64_t first_us, double pace,
-               std::chrono::steady_clock::time_point wall_start) {
-    if (!(pace > 0)) return;
-    const auto due =
-        wall_start +
-        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-            std::chrono::duration<double>(static_cast<double>(t_us - first_us) * 1e-6 / pace));
-    std::this_thread::sleep_until(due);
 }
 
 }  // namespace

@@ -31,23 +31,13 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fit_loop_alarm as alarm  # noqa: E402  (the scorecard's rule, the patient bootstrap)
+from fit_slack_regressor import columns  # noqa: E402  (a case's columns; exit 2 naming a missing one)
 
 PERSISTENCES = [1, 2, 5, 10, 20, 40]
 LEVELS = {"warning_10N": 10.0, "critical_14N": 14.0}
 CLEAR_FRACTION = 0.9
 BUDGET_PER_10MIN = 3.0
 LOST_BEYOND_WALL_MM = 40.0  # the scorecard scores a case up to here
-
-
-def columns(path, names):
-    with open(path) as f:
-        header = f.readline().strip().split(",")
-    missing = [n for n in names if n not in header]
-    if missing:
-        raise ValueError(f"{path}: no column {missing}")
-    a = np.genfromtxt(path, delimiter=",", skip_header=1, usecols=[header.index(n) for n in names])
-    a = a.reshape(-1, len(names))
-    return {n: a[:, i] for i, n in enumerate(names)}
 
 
 def load(folder):

@@ -1,5 +1,7 @@
 #include "host_sim/view/box_bus_rows.hpp"
 
+#include "host_sim/simulator/live_simulation.hpp"
+
 namespace scopekin::view {
 namespace {
 
@@ -46,7 +48,7 @@ void BoxBusRows::feed(std::uint64_t timestamp_us, const hal::CanFrame& frame) {
     protocol::StationForces station{};
     if (take(frame, protocol::kStationForcesId, station, refused_)) {
         if (station.station < stations_.size())
-            stations_[station.station] = {true, q16(station.path_mm), q16(station.normal_force_N)};
+            stations_[station.station] = {true, station.path_mm, station.normal_force_N};
         return;
     }
     protocol::BoxStatus status{};
@@ -74,22 +76,26 @@ void BoxBusRows::flush() {
 }
 
 nlohmann::ordered_json BoxBusRows::row() const {
-    nlohmann::ordered_json stations = nlohmann::ordered_json::array();
-    for (std::size_t k = 0; k < summary_.active_stations && k < stations_.size(); ++k)
-        if (stations_[k].heard)
-            stations.push_back(
-                nlohmann::ordered_json::array({stations_[k].path_mm, stations_[k].normal_N}));
-    return {{"time_s", period_s_},
-            {"handle_force_N", q16(handle_.force_N)},
-            {"handle_torque_Nmm", q16(handle_.torque_Nmm)},
-            {"insertion_mm", q16(insertion_.insertion_mm)},
-            {"box_tip_path_mm", q16(estimate_.tip_path_mm)},
-            {"box_tip_sd_mm", q16(estimate_.tip_uncertainty_mm)},
-            {"box_max_force_N", q16(summary_.max_contact_force_N)},
-            {"self_lock", alarms_.self_lock ? 1 : 0},
-            {"contact_level", static_cast<int>(alarms_.contact_force_level)},
-            {"fault_flags", kinetic_faults_},
-            {"stations", stations}};
+    // The same row as `run --view`'s (host_sim::box_view_row), from what the bus carried: the
+    // stations heard so far in index order.
+    kinetics::Outputs box{};
+    box.tip_path_mm = estimate_.tip_path_mm;
+    box.tip_uncertainty_mm = estimate_.tip_uncertainty_mm;
+    box.max_contact_force_N = summary_.max_contact_force_N;
+    box.self_lock_alarm = alarms_.self_lock;
+    box.contact_force_level = static_cast<kinetics::ContactForceLevel>(alarms_.contact_force_level);
+    box.fault_flags = kinetic_faults_;
+    std::uint8_t heard = 0;
+    for (std::size_t k = 0; k < summary_.active_stations && k < stations_.size(); ++k) {
+        if (!stations_[k].heard || heard >= box.stations.size()) continue;
+        box.stations[heard].path_position_mm = stations_[k].path_mm;
+        box.stations[heard].normal_force_N = stations_[k].normal_N;
+        ++heard;
+    }
+    box.active_stations = heard;
+    return host_sim::box_view_row(
+        period_s_, {q16(handle_.force_N), q16(handle_.torque_Nmm), q16(insertion_.insertion_mm)},
+        box);
 }
 
 }  // namespace scopekin::view

@@ -51,8 +51,8 @@ private:
     std::uint16_t kinetic_faults_ = 0;  ///< BoxStatus: the kinetics' FaultFlag bits
     struct Station {
         bool heard = false;
-        double path_mm = 0;
-        double normal_N = 0;
+        fixed_point::Q16_16 path_mm{};
+        fixed_point::Q16_16 normal_N{};
     };
     std::array<Station, 16> stations_{};
     std::uint64_t periods_ = 0, refused_ = 0, ignored_ = 0;
