@@ -55,7 +55,8 @@ private:
     std::unique_ptr<httplib::Server> server_;
     mutable std::mutex mutex_;
     std::condition_variable changed_;
-    std::string page_;
+    std::shared_ptr<const std::string>
+        page_;  ///< replaced whole: a request in flight keeps its own
     std::deque<std::string> events_;
     std::size_t first_event_ = 0;    ///< the index of events_.front() among all published
     std::size_t history_limit_ = 0;  ///< 0: keep all

@@ -17,8 +17,10 @@
 #   display (socketcan_vm.scopekin_display): 4 s of traffic; scopekin-box and `scopekin display
 #     --can vcan0` beside it (display_on_vcan.sh); busybox wget reads the page and the stream;
 #     check_display_run.py.
-# Both print the box's build (sanitizers), its overruns and the kernel's drops, and the time.
-# usage: run_box_vm_test.sh traffic|faults|display PYTHON3 DBC OUT_DIR CACHE VM_TIMEOUT_S
+#   box-view (socketcan_vm.scopekin_box_view): the same with the display started by the box itself,
+#     `scopekin-box --view` (display_on_vcan.sh box-view); and a display program that is not there.
+# All print the box's build (sanitizers), its overruns and the kernel's drops, and the time.
+# usage: run_box_vm_test.sh traffic|faults|display|box-view PYTHON3 DBC OUT_DIR CACHE VM_TIMEOUT_S
 #                           SCOPEKIN_BOX SCOPEKIN_VM_PEER CANPLAYER CANDUMP CANSEND TC SCOPEKIN
 #                           [VIEW_ASSETS]
 set -euo pipefail
@@ -54,7 +56,7 @@ case $scenario in
     echo "VM run (boot, ~9 s of traffic and faults, file transfer): ${SECONDS} s"
     "$python3" "$here/check_box_faults.py" "$out" "$dbc" "$work/sent.json"
     ;;
-  display)
+  display|box-view)
     # scopekin display --can vcan0 beside the box: 4 s of traffic; the page's scripts (argument 14)
     # go to the guest, as the view's build folder is not there.
     assets=${14}
@@ -63,12 +65,12 @@ case $scenario in
     strip --strip-debug -o "$work/scopekin" "$scopekin"
     bash "$here/vm_run.sh" "${common[@]}" --memory 1024 --script "$here/display_on_vcan.sh" \
       --bin "$canplayer" --bin "$work/scopekin:scopekin" --file "$work/handle.log:/scopekin/handle.log" \
-      --file "$assets:/scopekin/assets"
+      --file "$assets:/scopekin/assets" -- "$scenario"
     echo "VM run (boot, 4 s of traffic, the display read, file transfer): ${SECONDS} s"
-    "$python3" "$here/check_display_run.py" "$out" 4
+    "$python3" "$here/check_display_run.py" "$out" 4 "$scenario"
     ;;
   *)
-    echo "run_box_vm_test.sh: unknown scenario '$scenario' (traffic, faults or display)" >&2
+    echo "run_box_vm_test.sh: unknown scenario '$scenario' (traffic, faults, display or box-view)" >&2
     exit 2
     ;;
 esac

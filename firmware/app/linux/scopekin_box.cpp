@@ -2,7 +2,7 @@
 // handle sensors and the outputs, optionally a serial port for the test bench's EM tracker, the
 // firmware's cyclic executive at a fixed period.
 //
-//   scopekin-box --can IFACE [--serial DEV] [--period-ms N] [--record FILE] ...  (--help)
+//   scopekin-box --can IFACE [--serial DEV] [--period-ms N] [--record FILE] [--view] ...  (--help)
 //
 // This file is `main` for Linux: it parses the command line (CLI11, so this one translation unit
 // is compiled with exceptions), picks the backends (SocketCAN, POSIX serial that reopens its
@@ -10,7 +10,8 @@
 // SensorBox, which sees only the HAL interfaces.  --fault-log writes the box's fault state, on
 // the box's own disk, whenever it changes: what BoxStatus says on the bus, also while the bus is
 // down.  SIGINT / SIGTERM stop the loop at the end of the current period; the record and the
-// fault log are flushed, a summary printed (and written as JSON with --stats) and the exit status
+// fault log are flushed, the display started by --view (`scopekin display`, display_companion.hpp)
+// stopped, a summary printed (and written as JSON with --stats) and the exit status
 // says how it went:
 //   0 stopped by a signal or --duration-s, 2 bad usage or a device that cannot be opened,
 //   3 an I/O error while running (the record, the fault log or the stats could not be written).
@@ -26,6 +27,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "display_companion.hpp"
 #include "executive/sensor_box.hpp"
 #include "hal/clock.hpp"
 #include "hal/linux/linux_clock.hpp"
@@ -57,6 +59,9 @@ struct Options {
     std::string fault_log_path;
     std::uint32_t serial_retry_ms{100};
     bool quiet{false};
+    bool view{false};
+    bool no_browser{false};
+    scopekin::app::DisplayOptions display;
 };
 
 /// The box's objects: large (kinetics state, drivers), so they live here once, not on the stack.
@@ -290,6 +295,20 @@ nlohmann::json stats_json(const Box& box, bool serial, double elapsed_s, std::ui
     return json;
 }
 
+/// What became of the display started by --view.
+nlohmann::json display_json(const scopekin::app::DisplayCompanion& display,
+                            const scopekin::app::DisplayOptions& options) {
+    nlohmann::json json;
+    json["program"] = options.program;
+    json["port"] = options.port;
+    json["ended_on_its_own"] = display.ended_on_its_own();
+    json["exit_status"] =
+        display.end_signal() == 0 ? nlohmann::json(display.exit_status()) : nlohmann::json(nullptr);
+    json["end_signal"] = display.end_signal();
+    json["how"] = scopekin::app::describe_end(display.exit_status(), display.end_signal());
+    return json;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -329,12 +348,32 @@ int main(int argc, char** argv) {
                    "driver/tracker/kinetic fault bits, counters) to FILE for the first period, "
                    "every period in which it changes, and the last");
     app.add_flag("--quiet", options.quiet, "no progress line (once a second) on stderr");
+    auto* view = app.add_flag(
+        "--view", options.view,
+        "also show the box's page in a browser: starts `scopekin display --can IFACE` beside the "
+        "box, a process of its own that reads what the box sends on the bus (it prints the page's "
+        "address); it is stopped with the box, and if it ends the box goes on without it");
+    app.add_option("--view-port", options.display.port,
+                   "the display's port on 127.0.0.1 (0: any free port)")
+        ->needs(view)
+        ->capture_default_str();
+    app.add_flag("--no-browser", options.no_browser,
+                 "with --view: print the page's address, open no browser")
+        ->needs(view);
+    app.add_option("--display-program", options.display.program,
+                   "with --view: the scopekin program to run the display with (looked up on PATH "
+                   "unless it contains a '/')")
+        ->needs(view)
+        ->capture_default_str();
     app.set_version_flag("--version", "scopekin-box 0.1.0");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
     }
+    options.display.can_interface = options.can_interface;
+    options.display.open_browser = !options.no_browser;
+    options.display.quiet = options.quiet;
 
     static Box box;
     std::string error;
@@ -391,6 +430,12 @@ int main(int argc, char** argv) {
     sigaction(SIGINT, &action, nullptr);
     sigaction(SIGTERM, &action, nullptr);
 
+    static scopekin::app::DisplayCompanion display;
+    if (options.view && !display.start(options.display, error)) {
+        std::fprintf(stderr, "scopekin-box: --view: %s\n", error.c_str());
+        return 2;
+    }
+
     if (!options.quiet) {
         std::fprintf(stderr, "scopekin-box: running on %s every %u ms%s%s%s%s\n",
                      options.can_interface.c_str(), options.period_ms,
@@ -402,6 +447,7 @@ int main(int argc, char** argv) {
     const auto duration_us = static_cast<std::uint64_t>(options.duration_s * 1.0e6);
     scopekin::hal::PeriodicTimer timer(box.clock, config.period_us);
     std::uint64_t next_progress_us = start_us + 1000000U;
+    std::uint64_t next_display_check_us = start_us + 1000000U;
     std::uint64_t last_release_us = start_us;
     scopekin::hal::SerialReopenCounters reported_reopen{};
     while (!stop_requested.load()) {
@@ -431,6 +477,16 @@ int main(int argc, char** argv) {
             }
             reported_reopen = reopen;
         }
+        if (options.view && release_us >= next_display_check_us) {
+            next_display_check_us += 1000000U;
+            std::string how;
+            if (display.ended_since_last_check(how)) {
+                std::fprintf(stderr,
+                             "scopekin-box: t=%.3f s the display ended (%s); the box goes on "
+                             "without it\n",
+                             static_cast<double>(release_us - start_us) / 1.0e6, how.c_str());
+            }
+        }
         if (duration_us > 0U && release_us - start_us >= duration_us) {
             break;
         }
@@ -450,6 +506,7 @@ int main(int argc, char** argv) {
         }
     }
     const double elapsed_s = static_cast<double>(box.clock.now_us() - start_us) / 1.0e6;
+    display.stop();
 
     bool io_ok = true;
     std::uint64_t record_lines = 0;
@@ -475,8 +532,9 @@ int main(int argc, char** argv) {
             io_ok = false;
         }
     }
-    const nlohmann::json stats = stats_json(box, serial != nullptr, elapsed_s, record_lines,
-                                            record_errors, stop_signal.load());
+    nlohmann::json stats = stats_json(box, serial != nullptr, elapsed_s, record_lines,
+                                      record_errors, stop_signal.load());
+    if (options.view) stats["display"] = display_json(display, options.display);
     if (!options.stats_path.empty()) {
         std::ofstream out(options.stats_path);
         out << stats.dump(2) << "\n";

@@ -54,6 +54,11 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
     console.log(`     figure: ${((b.messages - a.messages) / seconds).toFixed(1)} messages and ${((b.frames - a.frames) / seconds).toFixed(1)} frames per wall second, ` +
       `${((b.time_s - a.time_s) / seconds).toFixed(1)} simulated s per wall s, ${((b.frames_drawn - a.frames_drawn) / seconds).toFixed(1)} canvas draws per s`);
     await page.screenshot({ path: path.join(outDir, 'live-running.png') });
+    // The charts, redrawn as the run grows, are drawn by the CPU (web/src/chart.js): on a software
+    // GPU their redraws held the page at 7 frames per second.
+    const charts = await page.evaluate(() => [...document.querySelectorAll('#timeline canvas')]
+      .map((c) => c.getContext('2d').getContextAttributes().willReadFrequently));
+    expect(charts.length === 3 && charts.every((v) => v === true), `the live charts' canvases are drawn by the CPU (willReadFrequently: ${JSON.stringify(charts)})`);
 
     await waitFor(/replay is at/, 600000);
     await sleep(500);

@@ -1,7 +1,7 @@
 // A discrepancy report (`scopekin discrepancy`): the verdict and the named effects, the held-out
 // RMS error per output and per region before and after, and each output measured against the
 // model before and after, the held-out blocks shaded: where the error sits.
-import uPlot from 'uplot';
+import { makeChart } from './chart.js';
 
 const fmt = (v, digits = 3) => (v === null || v === undefined || Number.isNaN(v) ? 'n/a' : Number(Number(v).toPrecision(digits)).toString());
 
@@ -92,8 +92,7 @@ function outputCharts(container, seriesByOutput) {
   const width = Math.max((container.clientWidth || 900) - 24, 300);
   const axis = { stroke: '#c8ccd0', size: 60, grid: { stroke: 'rgba(255,255,255,0.08)' } };
   for (const [key, s] of Object.entries(seriesByOutput)) {
-    // eslint-disable-next-line no-new
-    new uPlot({
+    makeChart({
       title: `${key}: measured, the model before and after (held-out blocks shaded)`,
       width,
       height: 170,

@@ -2,7 +2,7 @@
 // estimate with its one-SD band beside the truth and the insertion), the largest contact force,
 // with the box's alarms as bands, the truth's episodes and the fault flags as strips, and the
 // time cursor. A click or a drag on any chart moves the cursor.
-import uPlot from 'uplot';
+import { makeChart } from './chart.js';
 
 export const kAlarmStyle = {
   self_lock: { label: 'loop / self-lock', fill: 'rgba(0,114,178,0.22)', solid: '#0072b2' },
@@ -97,7 +97,7 @@ export class Timeline {
     });
     const columns = this.columns();
 
-    this.charts.push(new uPlot({
+    this.charts.push(makeChart({
       ...common('Handle: what the box measures', 150),
       series: [
         { label: 't [s]' },
@@ -107,7 +107,7 @@ export class Timeline {
       axes: [axisStyle({}), axisStyle({ scale: 'N', label: 'N' }), axisStyle({ scale: 'Nmm', side: 1, label: 'N·mm', grid: { show: false } })],
     }, columns[0], container));
 
-    this.charts.push(new uPlot({
+    this.charts.push(makeChart({
       ...common(view.data.box_only ? 'Tip along the colon: the box (±1 SD) and the insertion' : 'Tip along the colon: the box (±1 SD) and the truth', 170),
       series: [
         { label: 't [s]' },
@@ -121,7 +121,7 @@ export class Timeline {
       axes: [axisStyle({}), axisStyle({ label: 'mm' }), rightSpacer()],
     }, columns[1], container));
 
-    this.charts.push(new uPlot({
+    this.charts.push(makeChart({
       ...common(view.data.box_only ? 'Largest contact force: the box' : 'Largest contact force: the box and the truth', 150),
       series: [
         { label: 't [s]' },
