@@ -124,27 +124,30 @@ struct PairStart {
     std::vector<double> start;
 };
 
-/// The pairs fitted side by side: each fit's batches of runs leave threads idle that the other's
-/// fill.
-std::vector<EffectSetFit> fit_pair_starts(const DiscrepancyContext& context,
-                                          const std::vector<PairStart>& starts, StageLog& stages) {
+/// Effect sets fitted side by side from their starts (pairs, or a pair's members alone): each
+/// fit's batches of runs leave threads idle that the other's fill.
+std::vector<EffectSetFit> fit_starts_side_by_side(const DiscrepancyContext& context,
+                                                  const std::vector<PairStart>& starts,
+                                                  StageLog& stages) {
     std::string names;
-    for (const PairStart& p : starts)
-        names += (names.empty() ? "" : ", ") + candidate_library()[p.set[0]].name + " + " +
-                 candidate_library()[p.set[1]].name;
+    for (const PairStart& p : starts) {
+        names += names.empty() ? "" : ", ";
+        for (std::size_t k = 0; k < p.set.size(); ++k)
+            names += (k > 0 ? " + " : "") + candidate_library()[p.set[k]].name;
+    }
     stages.start("fitting " + names, (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
     // On windows (a long recording) two iterations: the start is close already, and the budget is
     // the point of the windows.
     const int iterations = context.evaluator.windowed() ? 2 : 3;
-    std::vector<std::future<EffectSetFit>> pair_fits;
+    std::vector<std::future<EffectSetFit>> futures;
     for (const PairStart& p : starts)
-        pair_fits.push_back(std::async(std::launch::async, [&context, p, iterations] {
+        futures.push_back(std::async(std::launch::async, [&context, p, iterations] {
             return fit_effect_set(p.set, context, &p.start, &p.held, iterations);
         }));
-    std::vector<EffectSetFit> pairs;
-    for (auto& f : pair_fits)
-        pairs.push_back(f.get());
-    return pairs;
+    std::vector<EffectSetFit> fits;
+    for (auto& f : futures)
+        fits.push_back(f.get());
+    return fits;
 }
 
 /// The best kPairs pairs by their linearised joint step from the neutral point (no run).
@@ -169,7 +172,7 @@ std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
         }
         starts.push_back(std::move(p));
     }
-    return fit_pair_starts(context, starts, stages);
+    return fit_starts_side_by_side(context, starts, stages);
 }
 
 /// The best kPairs partners of the refined single by their screen on its residual, each fitted
@@ -188,7 +191,7 @@ std::vector<EffectSetFit> fit_pairs_on_single(const DiscrepancyContext& context,
         p.start.insert(p.start.end(), partners[k].values.begin(), partners[k].values.end());
         starts.push_back(std::move(p));
     }
-    return fit_pair_starts(context, starts, stages);
+    return fit_starts_side_by_side(context, starts, stages);
 }
 
 /// report.json's account of the partner screen.
@@ -265,18 +268,7 @@ nlohmann::ordered_json refit_members_alone(const DiscrepancyContext& context,
                             best->values.begin() + static_cast<std::ptrdiff_t>(at + n)}});
         at += n;
     }
-    stages.start("fitting " + candidate_library()[best->candidates[0]].name + " and " +
-                     candidate_library()[best->candidates[1]].name +
-                     " alone from the pair's values",
-                 (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
-    const int iterations = context.evaluator.windowed() ? 2 : 3;
-    std::vector<std::future<EffectSetFit>> fits;
-    for (const PairStart& p : singles)
-        fits.push_back(std::async(std::launch::async, [&context, p, iterations] {
-            return fit_effect_set(p.set, context, &p.start, &p.held, iterations);
-        }));
-    for (auto& f : fits) {
-        EffectSetFit single = f.get();
+    for (EffectSetFit& single : fit_starts_side_by_side(context, singles, stages)) {
         account.push_back({{"effect", candidate_library()[single.candidates[0]].name},
                            {"ok", single.ok},
                            {"held_out_cost", single.held_out_cost},

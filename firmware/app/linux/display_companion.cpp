@@ -38,7 +38,6 @@ bool DisplayCompanion::start(const DisplayOptions& options, std::string& error) 
 }
 
 void DisplayCompanion::record_end(int wait_status, bool on_its_own) {
-    ended_ = true;
     ended_on_its_own_ = on_its_own;
     pid_ = -1;
     if (WIFEXITED(wait_status)) exit_status_ = WEXITSTATUS(wait_status);

@@ -35,8 +35,6 @@ public:
     /// Asks it to stop (SIGTERM) if it still runs and waits for it.
     void stop();
 
-    bool started() const { return pid_ > 0 || ended_; }
-    bool ended() const { return ended_; }
     /// Its exit status, or -1 while it runs or when a signal ended it.
     int exit_status() const { return exit_status_; }
     /// The signal that ended it, or 0.
@@ -48,7 +46,6 @@ private:
     void record_end(int wait_status, bool on_its_own);
 
     pid_t pid_ = -1;
-    bool ended_ = false;
     bool ended_on_its_own_ = false;
     int exit_status_ = -1;
     int end_signal_ = 0;
