@@ -39,6 +39,7 @@ DiscrepancyContext::DiscrepancyContext(const MeasuredRecording& recording,
     // The fits score the windows' spans (fit_windows.hpp); without windows, everything.
     for (const RunWindow& w : windows)
         data.fit_spans_s.emplace_back(w.score_from_s, w.end_s);
+    training_rows = block_rows(data, sigma, SampleSet::fit_training);
 }
 
 void DiscrepancyContext::run_model_as_given(const std::function<void(double)>& progress) {

@@ -6,6 +6,7 @@
 // against).
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -16,6 +17,7 @@
 #include "host_sim/discrepancy/fit_windows.hpp"
 #include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_spec.hpp"
+#include "host_sim/discrepancy/robust_objective.hpp"
 
 namespace scopekin::discrepancy {
 
@@ -44,9 +46,12 @@ struct DiscrepancyContext {
     /// its costs. DiscrepancyInputError if it cannot follow the recording.
     void run_model_as_given(const std::function<void(double)>& progress);
 
-    /// normalised_residuals (analysis.hpp) of a prediction against this recording and noise.
+    /// normalised_residuals (analysis.hpp) of a prediction against this recording and noise; on
+    /// the fits' training samples with outlier blocks capped (robust_objective.hpp), the fits'
+    /// objective.
     Eigen::VectorXd residuals(const ModelPrediction& p, SampleSet set) const {
-        return normalised_residuals(data, p, sigma, set);
+        Eigen::VectorXd r = normalised_residuals(data, p, sigma, set);
+        return set == SampleSet::fit_training ? cap_outlier_blocks(training_rows, std::move(r)) : r;
     }
 
     const WorkflowOptions& options;
@@ -55,6 +60,7 @@ struct DiscrepancyContext {
         windows;                ///< the fit windows; none: every run covers the whole recording
     std::vector<double> sigma;  ///< noise SD per output (estimate_noise)
     double noise_floor = 0.0;   ///< held-out cost of noise alone: 1 per assessed output
+    BlockRows training_rows;    ///< the fits' training rows' blocks (robust_objective.hpp)
     ModelSpec model;
     Evaluator evaluator;           ///< runs `model` under `data`
     ModelPrediction baseline;      ///< the model as given, whole recording

@@ -326,6 +326,7 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
         r.squaredNorm() / std::max(1.0, n - static_cast<double>(P)) * (1.0 + rho) / (1.0 - rho);
     const Eigen::MatrixXd cov =
         (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse() * s2;
+    const Eigen::MatrixXd jackknife = block_jackknife_covariance(context.training_rows, J, r);
     for (std::size_t j = 0; j < P; ++j) {
         // A parameter the training data do not respond to has no finite SD (the pseudo-inverse
         // would report 0, as if it were known exactly).
@@ -334,9 +335,42 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
                                     " at the fit (its Jacobian column is zero): not identified";
             continue;
         }
-        fit.sd[j] = std::sqrt(
-            std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
+        const auto jj = static_cast<Eigen::Index>(j);
+        fit.sd[j] =
+            std::sqrt(std::max({0.0, cov(jj, jj), jackknife.size() > 0 ? jackknife(jj, jj) : 0.0}));
     }
+}
+
+Eigen::MatrixXd block_jackknife_covariance(const BlockRows& rows, const Eigen::MatrixXd& J,
+                                           const Eigen::VectorXd& r) {
+    const Eigen::Index P = J.cols();
+    if (static_cast<std::size_t>(J.rows()) != rows.block_of_row.size() || P == 0) return {};
+    std::vector<Eigen::MatrixXd> H(kBlocks, Eigen::MatrixXd::Zero(P, P));
+    std::vector<Eigen::VectorXd> g(kBlocks, Eigen::VectorXd::Zero(P));
+    std::vector<bool> present(kBlocks, false);
+    for (Eigen::Index k = 0; k < J.rows(); ++k) {
+        const auto b = static_cast<std::size_t>(rows.block_of_row[static_cast<std::size_t>(k)]);
+        H[b] += J.row(k).transpose() * J.row(k);
+        g[b] += J.row(k).transpose() * r[k];
+        present[b] = true;
+    }
+    Eigen::MatrixXd total = Eigen::MatrixXd::Zero(P, P);
+    for (const Eigen::MatrixXd& h : H)
+        total += h;
+    std::vector<Eigen::VectorXd> moves;
+    for (std::size_t b = 0; b < H.size(); ++b)
+        if (present[b])
+            moves.push_back((total - H[b]).completeOrthogonalDecomposition().pseudoInverse() *
+                            g[b]);
+    if (moves.size() < 3) return {};
+    Eigen::VectorXd mean = Eigen::VectorXd::Zero(P);
+    for (const Eigen::VectorXd& m : moves)
+        mean += m / static_cast<double>(moves.size());
+    Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(P, P);
+    for (const Eigen::VectorXd& m : moves)
+        cov += (m - mean) * (m - mean).transpose();
+    const double B = static_cast<double>(moves.size());
+    return cov * ((B - 1.0) / B);
 }
 
 }  // namespace scopekin::discrepancy

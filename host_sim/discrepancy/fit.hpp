@@ -7,7 +7,10 @@
 // Uncertainty. Cov = s^2 tau (J'^T J')^-1, J' the Jacobian of the residual in units of the noise
 // (each sample weighted 1/sigma), s^2 = its mean square at the fit per degree of freedom, and
 // tau = (1 + rho) / (1 - rho) for the lag-1 autocorrelation rho of the residual: neighbouring
-// samples are not independent, and tau counts how many fewer independent ones there are.
+// samples are not independent, and tau counts how many fewer independent ones there are. The SD
+// reported is the larger of that and the training blocks' linearised jackknife (fit.cpp,
+// block_jackknife_covariance): where a block's own structure (an event's timing, a misfit the
+// effect cannot follow) drives the estimate, the residual is not noise, and the jackknife sees it.
 // BIC = N ln(RSS' / N) + P ln(N) on the training samples (N components, P parameters).
 #include <cstddef>
 #include <string>
@@ -55,6 +58,17 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Discrepan
 
 /// Standard deviations of a fit's parameters (the header's formula; P more runs).
 void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context);
+
+/// The block jackknife of a least-squares fit, linearised (no runs): with training block b left
+/// out, one Gauss-Newton step from the fit on the other blocks moves the parameters by
+/// (H - H_b)^-1 J_b^T r_b (the full gradient J^T r is about 0 at the fit); the covariance is
+/// (B - 1)/B times the scatter of those moves (Efron & Tibshirani, *An Introduction to the
+/// Bootstrap*, 1993, ch. 11). `J` and `r` in the rows' order (rows.block_of_row). Residuals that a
+/// block's own structure drives (an event's timing, a misfit the effect cannot follow) move the
+/// estimate when their block is left out, and the noise formula above does not see them. Empty
+/// when fewer than three blocks have rows.
+Eigen::MatrixXd block_jackknife_covariance(const BlockRows& rows, const Eigen::MatrixXd& J,
+                                           const Eigen::VectorXd& r);
 
 /// The BIC of a prediction with P fitted parameters (the baseline: P = 0).
 double bic_of(const DiscrepancyContext& context, const ModelPrediction& p, std::size_t parameters);

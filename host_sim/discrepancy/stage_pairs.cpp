@@ -176,7 +176,8 @@ std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
 }
 
 /// The best kPairs partners of the refined single by their screen on its residual, each fitted
-/// with it from the single's values and the partner's best grid point.
+/// with it from the partner's best grid point and the single's values there (as refined, or
+/// re-adjusted).
 std::vector<EffectSetFit> fit_pairs_on_single(const DiscrepancyContext& context,
                                               const EffectSetFit& single,
                                               const std::vector<EffectSetFit>& screened,
@@ -187,7 +188,7 @@ std::vector<EffectSetFit> fit_pairs_on_single(const DiscrepancyContext& context,
         const EffectSetFit& partner = screened[partners[k].screened];
         PairStart p{{single.candidates[0], partner.candidates[0]},
                     {single.held[0], partner.held[0]},
-                    single.values};
+                    partners[k].single_values};
         p.start.insert(p.start.end(), partners[k].values.begin(), partners[k].values.end());
         starts.push_back(std::move(p));
     }
@@ -202,7 +203,9 @@ nlohmann::ordered_json partner_screen_json(const std::vector<EffectSetFit>& scre
     for (const PartnerScreen& p : partners)
         out.push_back({{"partner", candidate_library()[screened[p.screened].candidates[0]].name},
                        {"values", p.values},
+                       {"single_values", p.single_values},
                        {"training_cost", p.training_cost},
+                       {"single", p.readjusted ? "re-adjusted" : "as refined"},
                        {"gain", excess > 0.0 ? (single_cost - p.training_cost) / excess : 0.0}});
     return out;
 }

@@ -80,11 +80,16 @@ std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
 
 /// A partner of the best single effect screened on what the single leaves: the single held at
 /// its refined values, the partner over its screening grid (sigmoid_mobility at its screened
-/// values), training runs only. The lowest cost per partner, best first.
+/// values), training runs only; then each partner point run again with the single re-adjusted by
+/// its least-squares step on a secant Jacobian about its refined values (two effects can trade off
+/// along a narrow valley the single alone sits beside). The lowest cost per partner, best first.
 struct PartnerScreen {
     std::size_t screened = 0;    ///< index of the partner's fit in the screened list
     std::vector<double> values;  ///< the partner's values at its lowest cost
-    double training_cost = 0;    ///< the pair's, single refined and partner there
+    double training_cost = 0;    ///< the pair's there (a run's)
+    /// The single's values there: its refined ones, or re-adjusted (`readjusted`).
+    std::vector<double> single_values;
+    bool readjusted = false;
 };
 std::vector<PartnerScreen> screen_partners(const DiscrepancyContext& context,
                                            const EffectSetFit& single,

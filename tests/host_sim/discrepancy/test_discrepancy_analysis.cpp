@@ -18,6 +18,7 @@
 #include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_run.hpp"
 #include "host_sim/discrepancy/model_spec.hpp"
+#include "host_sim/discrepancy/robust_objective.hpp"
 #include "model/scenario/procedure.hpp"
 #include "model/scenario/simulation.hpp"
 
@@ -143,6 +144,47 @@ TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
     const std::vector<double> sigma{0.866, 0.0, 0.0};
     EXPECT_NEAR(normalised_residuals(d, shifted, sigma, SampleSet::training).squaredNorm(),
                 std::pow(3.0 / 0.866, 2), 1e-9);
+}
+
+// The fits' objective caps a training block that stands out (robust_objective.hpp): a model off
+// by 3 mm in one training block only (an event shifted in time) and exact elsewhere costs, plain,
+// (3/0.866)^2 times that block's share of the training samples; capped, ten times the block's
+// noise floor (the same share). Off by 3 mm everywhere, no block stands out: nothing is capped.
+TEST(DiscrepancyAnalysis, AnOutlierBlockIsCappedAndASmoothMisfitIsNot) {
+    const MeasuredRecording d = extract_measured_recording(make_recording(20.0, 0.5), "r.csv");
+    const std::vector<double> sigma{0.866, 0.0, 0.0};
+    const BlockRows rows = block_rows(d, sigma, SampleSet::training);
+    ModelPrediction exact;
+    exact.ok = true;
+    for (const MeasuredSeries& m : d.outputs)
+        exact.outputs.push_back(m.value);
+    // Seven training blocks (0, 2, 3, 5, 6, 8, 9), each about a seventh of the samples.
+    double floor_sum = 0.0;
+    for (int b = 0; b < kBlocks; ++b) {
+        EXPECT_EQ(rows.noise_floor[static_cast<std::size_t>(b)] > 0.0, !is_held_out_block(b)) << b;
+        floor_sum += rows.noise_floor[static_cast<std::size_t>(b)];
+    }
+    EXPECT_NEAR(floor_sum, 1.0, 1e-12);
+    ModelPrediction event = exact;
+    const MeasuredSeries& tip = d.outputs[0];
+    for (std::size_t i = 0; i < tip.time_s.size(); ++i)
+        if (block_of(d, tip.time_s[i]) == 5) event.outputs[0][i].x() += 3.0;
+    const Eigen::VectorXd plain = normalised_residuals(d, event, sigma, SampleSet::training);
+    const double block5_share = rows.noise_floor[5];
+    EXPECT_NEAR(plain.squaredNorm(), std::pow(3.0 / 0.866, 2) * block5_share, 1e-9);
+    EXPECT_NEAR(cap_outlier_blocks(rows, plain).squaredNorm(), kBlockCapOverNoise * block5_share,
+                1e-9);
+    // The same misfit everywhere: no block stands out, nothing capped.
+    ModelPrediction smooth = exact;
+    for (auto& v : smooth.outputs[0])
+        v.x() += 3.0;
+    const Eigen::VectorXd everywhere = normalised_residuals(d, smooth, sigma, SampleSet::training);
+    EXPECT_NEAR(cap_outlier_blocks(rows, everywhere).squaredNorm(), everywhere.squaredNorm(),
+                1e-12);
+    // An exact model: nothing to cap either.
+    EXPECT_EQ(cap_outlier_blocks(rows, normalised_residuals(d, exact, sigma, SampleSet::training))
+                  .squaredNorm(),
+              0.0);
 }
 
 // Windows: one per block where the hand moves most, the first part spin-up; none when the
