@@ -483,7 +483,8 @@ int main(int argc, char** argv) {
             if (display.ended_since_last_check(how)) {
                 std::fprintf(stderr,
                              "scopekin-box: t=%.3f s the display ended (%s); the box goes on "
-                             "without it\n",
+                             "without it (the display's own message says why; the box sets its "
+                             "port with --view-port)\n",
                              static_cast<double>(release_us - start_us) / 1.0e6, how.c_str());
             }
         }
