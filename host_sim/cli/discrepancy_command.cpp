@@ -56,6 +56,40 @@ int run_thesis_cantilever_case(const DiscrepancyOptions& o) {
     }
 }
 
+/// "ei_profile (tip_factor 0.909, handle_factor 0.926)": a candidate set and its fitted values.
+std::string fitted_set_text(const Json& set) {
+    std::string text;
+    for (std::size_t k = 0; k < set["effects"].size(); ++k) {
+        std::string values;
+        for (const Json& p : set["parameters"][k]) {
+            if (!p["fitted"].get<bool>()) continue;
+            char v[64];
+            if (p["value"].is_number())
+                std::snprintf(v, sizeof v, "%.4g", p["value"].get<double>());
+            else
+                std::snprintf(v, sizeof v, "%s", p["value"].dump().c_str());
+            values += (values.empty() ? "" : ", ") + p["name"].get<std::string>() + " " + v;
+        }
+        text += (text.empty() ? "" : " + ") + set["effects"][k].get<std::string>() + " (" + values +
+                ")";
+    }
+    return text;
+}
+
+/// report.md's section on the candidates the recording cannot tell from the named set.
+std::string equally_consistent_markdown(const Json& r) {
+    if (!r.contains("equally_consistent") || r["equally_consistent"]["sets"].empty()) return "";
+    std::string md = "## Explained as well by\n\n";
+    for (const Json& set : r["equally_consistent"]["sets"]) {
+        char cost[32];
+        std::snprintf(cost, sizeof cost, "%.4g", set["held_out_cost"].get<double>());
+        md += "- " + fitted_set_text(set) + ": held-out cost " + cost + "\n";
+    }
+    return md + "\nThis recording cannot tell these from the effects named (" +
+           r["equally_consistent"]["rule"].get<std::string>() +
+           "); a recording that loads the scope differently may.\n\n";
+}
+
 /// report.md: the verdict, the effects, the errors before and after, the candidates' scores.
 std::string report_markdown(const Json& r) {
     auto num = [](const Json& v, const char* format) {
@@ -90,6 +124,7 @@ std::string report_markdown(const Json& r) {
                   (p["fitted"].get<bool>() ? "fitted" : p["how"].get<std::string>()) + " |\n";
         md += "\n";
     }
+    md += equally_consistent_markdown(r);
     md +=
         "## Held-out RMS error per output\n\n| output | noise SD | before | after "
         "|\n|---|---|---|---|\n";
@@ -227,6 +262,9 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
             }
             std::printf("\n");
         }
+        for (const Json& set : r["equally_consistent"]["sets"])
+            std::printf("  explained as well by %s (the recording cannot tell them apart)\n",
+                        fitted_set_text(set).c_str());
         std::printf("held-out RMS error (before -> after):\n");
         for (const auto& [name, before] : r["rmse_before"].items()) {
             const Json& noise = r["significance"]["outputs"][name]["noise_sd"];

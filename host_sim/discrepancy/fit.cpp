@@ -6,10 +6,7 @@
 #include <limits>
 
 namespace scopekin::discrepancy {
-namespace {
 
-/// Per residual row, sqrt(n_o) of its output: turns the 1/(sigma sqrt(n)) weighting of
-/// normalised_residuals into plain 1/sigma.
 Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<double>& sigma,
                             SampleSet set) {
     std::vector<double> s;
@@ -22,6 +19,8 @@ Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<dou
     }
     return Eigen::Map<const Eigen::VectorXd>(s.data(), static_cast<Eigen::Index>(s.size()));
 }
+
+namespace {
 
 /// The runs of a forward-difference Jacobian at x: one per parameter, stepped by its `step`
 /// (backwards where that would leave the bounds).
@@ -284,6 +283,26 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Discrepan
     return fit;
 }
 
+double valley_variance(const EffectSetFit& fit, const std::vector<FittedParameter>& params,
+                       double chi2_at_fit, double s2) {
+    const nlohmann::ordered_json& walk = fit.valley_walk;
+    if (!walk.is_object() || !walk.contains("floor") || !walk.contains("along"))
+        return std::numeric_limits<double>::quiet_NaN();
+    std::size_t q = params.size();
+    for (std::size_t j = 0; j < params.size(); ++j)
+        if (params[j].key == walk["along"].get<std::string>()) q = j;
+    if (q == params.size()) return std::numeric_limits<double>::quiet_NaN();
+    double rise_d2 = 0.0, d4 = 0.0;
+    for (const auto& point : walk["floor"]) {
+        const double d = point["values"][q].get<double>() - fit.values[q];
+        const double rise = std::max(0.0, point["training_chi2"].get<double>() - chi2_at_fit);
+        rise_d2 += rise * d * d;
+        d4 += d * d * d * d;
+    }
+    if (!(d4 > 0.0) || !(rise_d2 > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+    return s2 * d4 / rise_d2;
+}
+
 void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
     const MeasuredRecording& data = context.data;
     const std::vector<double>& sigma = context.sigma;
@@ -336,8 +355,15 @@ void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context) {
             continue;
         }
         const auto jj = static_cast<Eigen::Index>(j);
+        // A valley the fit was walked along (walk_valley) says how far the parameter can move at
+        // the least cost: its floor's width, not the curvature at the fit, where a narrow valley
+        // reads as a tight bound on both parameters.
+        const bool walked = fit.valley_walk.is_object() &&
+                            params[j].key == fit.valley_walk["along"].get<std::string>();
+        const double valley = walked ? valley_variance(fit, params, r.squaredNorm(), s2) : 0.0;
         fit.sd[j] =
-            std::sqrt(std::max({0.0, cov(jj, jj), jackknife.size() > 0 ? jackknife(jj, jj) : 0.0}));
+            std::sqrt(std::max({0.0, cov(jj, jj), jackknife.size() > 0 ? jackknife(jj, jj) : 0.0,
+                                std::isfinite(valley) ? valley : 0.0}));
     }
 }
 

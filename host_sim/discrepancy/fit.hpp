@@ -43,6 +43,8 @@ struct EffectSetFit {
     /// Screening only, one-parameter candidates: the grid's training cost along the parameter's
     /// axis, (value, cost) by ascending value (the refinement's line search visits its dips).
     std::vector<std::pair<double, double>> screen_profile;
+    /// Two-parameter candidates: the refinement's walk along the valley (walk_valley), else null.
+    nlohmann::ordered_json valley_walk;
     bool ok = false;
     std::string failure;
 };
@@ -56,7 +58,22 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Discrepan
                             const std::vector<nlohmann::json>* held = nullptr,
                             int max_iterations = 3);
 
-/// Standard deviations of a fit's parameters (the header's formula; P more runs).
+/// Per residual row, sqrt(n_o) of its output: turns the 1/(sigma sqrt(n)) weighting of
+/// normalised_residuals into plain 1/sigma (chi-square residuals).
+Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<double>& sigma,
+                            SampleSet set);
+
+/// The variance of the parameter a fit's valley was walked along (walk_valley, `fit.valley_walk`)
+/// from the valley's floor: the floor's rise in chi-square above the fit's (`chi2_at_fit`), fitted
+/// by a (q - q_fit)^2 through the fit (least squares), is 1 / [(J^T J)^-1]_qq of the Gauss-Newton
+/// model minimised over the other parameter, so the variance is s2 / a (`s2`: the residual
+/// variance add_uncertainty scales the covariance by). NaN without a walk or without a rise.
+double valley_variance(const EffectSetFit& fit, const std::vector<FittedParameter>& params,
+                       double chi2_at_fit, double s2);
+
+/// Standard deviations of a fit's parameters (the header's formula; P more runs). A parameter the
+/// fit's valley was walked along (walk_valley) takes the larger of that and the valley floor's
+/// width (the floor's chi-square rise fitted by a parabola through the fit).
 void add_uncertainty(EffectSetFit& fit, const DiscrepancyContext& context);
 
 /// The block jackknife of a least-squares fit, linearised (no runs): with training block b left

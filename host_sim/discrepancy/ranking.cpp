@@ -77,4 +77,21 @@ void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>
                 fits.begin() + static_cast<std::ptrdiff_t>(lead) + 1);
 }
 
+bool explains_as_well(double other, double named, double noise_floor) {
+    const bool both_to_noise =
+        named - noise_floor < kMinRestCost && other - noise_floor < kMinRestCost;
+    return other <= named + kMinRestCost || both_to_noise;
+}
+
+std::vector<std::size_t> equally_consistent(const DiscrepancyContext& context,
+                                            const std::vector<EffectSetFit>& fits,
+                                            std::size_t named) {
+    std::vector<std::size_t> equals;
+    for (std::size_t k = 0; k < fits.size(); ++k)
+        if (k != named && fits[k].ok &&
+            explains_as_well(fits[k].held_out_cost, fits[named].held_out_cost, context.noise_floor))
+            equals.push_back(k);
+    return equals;
+}
+
 }  // namespace scopekin::discrepancy

@@ -43,4 +43,17 @@ bool earns_its_parameters(double richer_held_out, double simpler_held_out, doubl
 /// ei_profile (0.61, 0.94) removed 13.2 of the 42 that ei_scale left, 31 %, and was the hidden one.)
 void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits);
 
+/// Whether a fit of held-out cost `other` explains the held-out data as well as the named set's
+/// (`named`): at most kMinRestCost above it, or both less than kMinRestCost above `noise_floor`.
+bool explains_as_well(double other, double named, double noise_floor);
+/// The other working fits that explain the held-out data as well as `fits[named]`: a held-out cost
+/// at most kMinRestCost above the named set's, or both leaving less than kMinRestCost of excess
+/// (each explains the recording to its noise). The recording cannot tell them from the named set:
+/// the report lists them beside it (a hidden distal softening of 0.9 on procedure C is named
+/// ei_scale 0.912, held-out cost 4.13, and ei_profile (0.909, 0.926) reaches 3.95, both under the
+/// noise floor of 5). Costs on the fit windows when fitted on windows.
+std::vector<std::size_t> equally_consistent(const DiscrepancyContext& context,
+                                            const std::vector<EffectSetFit>& fits,
+                                            std::size_t named);
+
 }  // namespace scopekin::discrepancy

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <utility>
 
@@ -240,8 +241,30 @@ Json candidates_json(const DiscrepancyContext& context, const Findings& findings
                                      f.held_out_cost, context.noise_floor)
                    : 0.0},
              {"iterations", f.iterations}});
+        if (!f.valley_walk.is_null()) candidates.back()["valley_walk"] = f.valley_walk;
     }
     return candidates;
+}
+
+/// The candidates the recording cannot tell from the named set (report.json "equally_consistent").
+Json equally_consistent_json(const Findings& findings) {
+    Json sets = Json::array();
+    for (std::size_t i : findings.verdict.equally_consistent) {
+        const EffectSetFit& f = findings.candidates[i];
+        Json params = Json::array();
+        for (std::size_t k = 0; k < f.candidates.size(); ++k)
+            params.push_back(effect_parameters(f, k));
+        sets.push_back(
+            {{"effects", names_of(f)}, {"parameters", params}, {"held_out_cost", f.held_out_cost}});
+    }
+    char margin[32];
+    std::snprintf(margin, sizeof margin, "%g", kMinRestCost);
+    return {
+        {"rule", std::string("the other candidates whose held-out cost is at most ") + margin +
+                     " above the named set's, or which like it leave less than " + margin +
+                     " above the noise floor: this recording cannot tell them from the named set "
+                     "(costs on the fit windows when fitted on windows)"},
+        {"sets", sets}};
 }
 
 /// The fit windows and the confirmation on the whole recording (report.json "fit_windows").
@@ -285,6 +308,7 @@ Json build_report(const DiscrepancyContext& context, const Findings& findings,
     r["model"] = context.options.model_source;
     r["verdict"] = findings.verdict.verdict;
     r["effects"] = effects_json(context, findings, by_region);
+    r["equally_consistent"] = equally_consistent_json(findings);
     r["rmse_before"] = rmse_per_output(data, before, SampleSet::held_out);
     r["rmse_after"] = rmse_per_output(data, after, SampleSet::held_out);
     const double before_most = rms_error(data, before, most_affected, SampleSet::held_out);

@@ -8,6 +8,16 @@
 #include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
+const Candidate* two_parameter_search(const DiscrepancyContext& context, const EffectSetFit& fit) {
+    if (context.evaluator.windowed()) return nullptr;  // long runs: the 10-minute budget
+    if (!fit.ok || fit.candidates.size() != 1) return nullptr;
+    const Candidate& c = candidate_library()[fit.candidates[0]];
+    if (c.parameters.size() != 2 || c.parameters[0].screen.empty() ||
+        c.parameters[1].screen.empty())
+        return nullptr;
+    return &c;
+}
+
 namespace {
 
 /// The runner-up is refined when its screening explained at least this share of the excess: its
@@ -139,12 +149,9 @@ std::pair<double, double> wide_bracket_of(const FittedParameter& p, double x) {
 /// ei_scale, and from ei_scale's (0.647, 0.647) it did not move. Keeps the fit when nothing beats
 /// it.
 void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages) {
-    if (context.evaluator.windowed()) return;  // long runs: the 10-minute recording's budget
-    if (!fit.ok || fit.candidates.size() != 1) return;
-    const Candidate& c = candidate_library()[fit.candidates[0]];
-    if (c.parameters.size() != 2 || c.parameters[0].screen.empty() ||
-        c.parameters[1].screen.empty())
-        return;
+    const Candidate* two = two_parameter_search(context, fit);
+    if (!two) return;
+    const Candidate& c = *two;
     stages.start("searching " + c.name + "'s box",
                  (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
     std::vector<double> best = fit.values;
@@ -254,8 +261,10 @@ std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
     std::vector<EffectSetFit> first(candidates.begin(),
                                     candidates.begin() + static_cast<std::ptrdiff_t>(tried));
     restart_nested(context, first, stages);
-    for (EffectSetFit& f : first)
+    for (EffectSetFit& f : first) {
         refine_in_box(context, f, stages);
+        walk_valley(context, f, stages);
+    }
     restart_nested(context, first, stages);
     std::move(first.begin(), first.end(), candidates.begin());
     std::sort(candidates.begin(), candidates.end(), by_held_out);

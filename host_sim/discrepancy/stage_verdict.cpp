@@ -53,6 +53,8 @@ Verdict give_verdict(const DiscrepancyContext& context, std::optional<std::size_
         v.verdict = "unexplained";
         return v;
     }
+    // Before the confirmation: every held-out cost compared on the same data (the windows').
+    v.equally_consistent = equally_consistent(context, candidates, *chosen);
     EffectSetFit& named = candidates[*chosen];
     const bool windowed = context.evaluator.windowed();
     stages.start(windowed ? "uncertainty, and the named effects over the whole recording"
@@ -65,6 +67,7 @@ Verdict give_verdict(const DiscrepancyContext& context, std::optional<std::size_
         add_uncertainty(named, context);
     v.verdict = holds ? "named" : "unexplained";
     if (holds) v.named = chosen;
+    if (!holds) v.equally_consistent.clear();
     return v;
 }
 

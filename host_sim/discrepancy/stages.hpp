@@ -7,6 +7,7 @@
 //                           step from a shared Jacobian; the better is its start
 //   stage_refinement.cpp    Levenberg-Marquardt on the best (and on a runner-up that comes close),
 //                           then derivative-free searches (line, box) and nested restarts
+//   stage_valley_walk.cpp   two-parameter candidates: the training cost's valley walked
 //   stage_pairs.cpp         pairs or not (the score test), then the two best pairs side by side
 //   stage_verdict.cpp       named or unexplained; the named effects' uncertainty (and, fitted on
 //                           windows, their run over the whole recording)
@@ -40,6 +41,8 @@ struct Verdict {
     std::string verdict = "none";         ///< none, named or unexplained
     std::optional<std::size_t> named;     ///< index into the candidates of the effects named
     nlohmann::ordered_json confirmation;  ///< fitted on windows: the named effects' full run
+    /// The other candidates that explain the held-out data as well (equally_consistent).
+    std::vector<std::size_t> equally_consistent;
 };
 
 /// What the screening found: one fit per candidate, and how it got there.
@@ -77,6 +80,25 @@ Screening screen_candidates(const DiscrepancyContext& context);
 std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
                                             const std::vector<EffectSetFit>& screened,
                                             StageLog& stages);
+
+/// The candidate of a working single-effect fit whose two parameters both have screening axes,
+/// when not fitted on windows (long runs: the 10-minute recording's budget): what the box search
+/// and the valley walk work on. Null otherwise.
+const Candidate* two_parameter_search(const DiscrepancyContext& context, const EffectSetFit& fit);
+
+/// Two-parameter single candidates (not on windows): the valley of the training cost walked from
+/// the fit. The parameter the cost changes least along is stepped by its finite-difference step
+/// (6 steps each way at most, stopping after 2 that rise), the other searched across the valley
+/// at each (2 rounds of 7 runs within ± 0.4 of its step about the floor the valley's slope
+/// predicts); the lowest floor point is narrowed down at half and a quarter of the step either
+/// side, then Levenberg-Marquardt from there; kept where it fits better.
+/// Why: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on procedure B leaves a
+/// valley about 0.02 wide in the tip factor whose floor falls smoothly from ei_scale's (0.645,
+/// 0.645) at 7.5 to 4.6 at the truth, while a tip factor 0.01 low lets a stick-and-release go at
+/// another time (19 to 20): finite differences of 0.1 and the box's grid both cross it, and
+/// the fit stayed at the uniform (0.645, 0.645). The floor is in report.json's candidates
+/// ("valley_walk").
+void walk_valley(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages);
 
 /// A partner of the best single effect screened on what the single leaves: the single held at
 /// its refined values, the partner over its screening grid (sigmoid_mobility at its screened

@@ -130,6 +130,11 @@ def judge(report, effects):
                 "why": None if ok else f"verdict {verdict} ({', '.join(named) or 'no effect'}) on a null recording"}
     hidden = sorted(e["name"] for e in effects)
     result = {"verdict": verdict, "named": named, "verdict_ok": verdict == "named", "names_ok": named == hidden}
+    # The sets the report gives as explaining the recording as well as the named one: where the
+    # hidden set is among them the recording cannot tell it from what was named (still a failure).
+    equals = [sorted(s["effects"]) for s in (report.get("equally_consistent") or {}).get("sets", [])]
+    result["equally_consistent"] = equals
+    result["hidden_listed_as_equal"] = named != hidden and hidden in equals
     fitted = {e["name"]: {p["name"]: p.get("value") for p in e.get("parameters", [])}
               for e in report.get("effects", [])}
     sds = {e["name"]: {p["name"]: p.get("sd") for p in e.get("parameters", [])} for e in report.get("effects", [])}

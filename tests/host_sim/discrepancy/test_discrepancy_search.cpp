@@ -115,6 +115,22 @@ TEST(DiscrepancyNestedEffects, TheRicherFitMustRemoveHalfOfWhatTheSimplerLeaves)
     EXPECT_FALSE(earns_its_parameters(9.0, 8.0, 6.0));   // worse
 }
 
+// What the recording cannot tell from the named set: a held-out cost within half a noise variance
+// of the named set's, or both under half a noise variance above the floor. The sweep's numbers: a
+// hidden distal softening 0.9 on procedure C (ei_scale 4.13 named, ei_profile 3.95, floor 5) and
+// 0.6 on B (both 11.0); a hidden profile 0.5 on B (ei_profile 5.06 named, ei_scale 10.14, floor
+// 6) and 0.8 (6.81 and 8.17) are told apart.
+TEST(DiscrepancyNestedEffects, WhatExplainsTheHeldOutDataAsWellIsListed) {
+    EXPECT_TRUE(explains_as_well(3.95, 4.13, 5.0));
+    EXPECT_TRUE(explains_as_well(11.0, 11.0, 6.0));
+    EXPECT_FALSE(explains_as_well(10.14, 5.06, 6.0));
+    EXPECT_FALSE(explains_as_well(8.17, 6.81, 6.0));
+    EXPECT_TRUE(explains_as_well(4.49, 3.0, 5.0));  // 1.49 apart, both under the floor
+    EXPECT_FALSE(explains_as_well(5.6, 5.0, 5.0));  // 0.6 apart, 0.6 above the floor
+    EXPECT_TRUE(explains_as_well(8.5, 8.0, 6.0));   // exactly half a variance above
+    EXPECT_FALSE(explains_as_well(8.51, 8.0, 6.0));
+}
+
 // The dips of a screening profile, lowest first: the hidden EI factor 1.3 on procedure C, whose
 // training cost dips at 1.12 and again at 1.4 with a step between (650, 15,483, 965); ends count
 // when below their one neighbour; a flat or one-point profile has none; failed runs (infinite
@@ -210,6 +226,32 @@ TEST(DiscrepancyUncertainty, TheBlockJackknifeOfAMeanAgainstItsClosedForm) {
     EXPECT_EQ(block_jackknife_covariance(two, Eigen::MatrixXd::Ones(4, 1), Eigen::VectorXd::Ones(4))
                   .size(),
               0);
+}
+
+// The walked parameter's variance from the valley's floor, against the Gauss-Newton closed form:
+// with chi2(x) = chi2_fit + (x - x_fit)^T H (x - x_fit), the floor over the other parameter rises
+// as d^2 / [H^-1]_qq, so the variance is s2 [H^-1]_qq. H = [[4, 3], [3, 2.5]] (det 1, a narrow
+// valley): [H^-1]_handle = 4, while the curvature at the fit along the handle alone (2.5) would
+// say 0.4.
+TEST(DiscrepancyUncertainty, TheValleysFloorGivesTheWalkedParametersVariance) {
+    const std::vector<FittedParameter> params{{"tip_factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5}},
+                                              {"handle_factor", "1", 0.3, 2.0, 1.0, 0.1, {0.5}}};
+    EffectSetFit fit;
+    fit.values = {0.6, 1.0};
+    const double chi2_fit = 2000.0, s2 = 1.7;
+    nlohmann::ordered_json floor = nlohmann::ordered_json::array();
+    for (double d : {-0.3, -0.2, -0.1, 0.0, 0.1, 0.25})
+        floor.push_back({{"values", {0.6 - 0.75 * d, 1.0 + d}},  // the floor: tip = -(3/4) d
+                         {"training_chi2", chi2_fit + d * d / 4.0}});
+    fit.valley_walk = {{"along", "handle_factor"}, {"floor", floor}};
+    EXPECT_NEAR(valley_variance(fit, params, chi2_fit, s2), s2 * 4.0, 1e-9);
+    // A floor point below the fit's chi-square counts as no rise; none rising: no variance.
+    nlohmann::ordered_json flat = nlohmann::ordered_json::array();
+    flat.push_back({{"values", {0.6, 1.1}}, {"training_chi2", chi2_fit - 5.0}});
+    fit.valley_walk["floor"] = flat;
+    EXPECT_TRUE(std::isnan(valley_variance(fit, params, chi2_fit, s2)));
+    fit.valley_walk = nullptr;  // not walked
+    EXPECT_TRUE(std::isnan(valley_variance(fit, params, chi2_fit, s2)));
 }
 
 }  // namespace
