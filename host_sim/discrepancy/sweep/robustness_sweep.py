@@ -268,7 +268,9 @@ def write_markdown(out, summary, results):
         lines.append(f"| {effect} | {size} | " + " | ".join(cells) + " |")
     lines += ["", "Per effect: " + ", ".join(f"{e} {percent(v)}" for e, v in summary["by_effect"].items()), ""]
     if summary["failures"]:
-        lines += ["Failures (the first criterion missed):", ""]
+        listed = sum(1 for f in summary["failures"] if f["hidden_listed_as_equal"])
+        lines += [f"Failures (the first criterion missed; in {listed} of {len(summary['failures'])} the report lists the "
+                  "hidden set beside the named one as explaining the recording as well):", ""]
         lines += [f"- `{f['case']}`: {f['why']}" +
                   ("; the report lists the hidden set as explaining the recording as well (not identifiable "
                    "on this recording)" if f["hidden_listed_as_equal"] else "") for f in summary["failures"]]

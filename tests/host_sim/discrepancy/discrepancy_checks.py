@@ -266,6 +266,14 @@ def check_sweep(_name):
     weak = procedures.judge(report(0.8, reduction=0.4), hidden)
     expect(not weak["success"] and "down 40 %" in weak["why"], f"the rule: the error down 40 % fails ({weak['why']})")
     expect(not procedures.judge(report(0.8), [])["success"], "the rule: an effect named on a null recording fails")
+    # ei_scale named where ei_profile was hidden, ei_profile listed as explaining it as well: still a
+    # failure, and the summary says the recording could not tell them apart.
+    equal = report(0.8)
+    equal["equally_consistent"] = {"sets": [{"effects": ["ei_profile"]}]}
+    listed = procedures.judge(equal, [{"name": "ei_profile", "tip_factor": 0.8, "handle_factor": 1.0}])
+    expect(not listed["success"] and listed["hidden_listed_as_equal"],
+           f"the rule: the hidden set listed as equal is a failure, marked ({listed})")
+    expect(not procedures.judge(report(0.8), hidden)["hidden_listed_as_equal"], "the rule: right names are not marked")
 
 
 if CHECK == "bad_input":
