@@ -34,14 +34,20 @@ double chi2_of(const DiscrepancyContext& context, const ModelPrediction& p) {
         .squaredNorm();
 }
 
-/// Training runs at `points`; the lowest (infinite cost when every run failed).
-ValleyPoint lowest_of(const DiscrepancyContext& context, const Candidate& c,
-                      const nlohmann::json& held, const std::vector<std::vector<double>>& points) {
+/// Training runs of candidate `c` at each of `points` (its parameter values).
+std::vector<ModelPrediction> training_runs(const DiscrepancyContext& context, const Candidate& c,
+                                           const nlohmann::json& held,
+                                           const std::vector<std::vector<double>>& points) {
     std::vector<nlohmann::json> lists;
     for (const std::vector<double>& x : points)
         lists.push_back(nlohmann::json::array({c.entry(x, held)}));
-    const std::vector<ModelPrediction> runs =
-        context.evaluator.run_all(lists, RunScope::fit_training);
+    return context.evaluator.run_all(lists, RunScope::fit_training);
+}
+
+/// Training runs at `points`; the lowest (infinite cost when every run failed).
+ValleyPoint lowest_of(const DiscrepancyContext& context, const Candidate& c,
+                      const nlohmann::json& held, const std::vector<std::vector<double>>& points) {
+    const std::vector<ModelPrediction> runs = training_runs(context, c, held, points);
     ValleyPoint lowest;
     for (std::size_t k = 0; k < runs.size(); ++k) {
         if (!runs[k].ok) continue;
@@ -89,11 +95,7 @@ std::size_t weaker_parameter(const DiscrepancyContext& context, const Candidate&
             x[j] = std::clamp(x[j] + sign * p.step, p.lo, p.hi);
             points.push_back(std::move(x));
         }
-    std::vector<nlohmann::json> lists;
-    for (const std::vector<double>& x : points)
-        lists.push_back(nlohmann::json::array({c.entry(x, fit.held[0])}));
-    const std::vector<ModelPrediction> runs =
-        context.evaluator.run_all(lists, RunScope::fit_training);
+    const std::vector<ModelPrediction> runs = training_runs(context, c, fit.held[0], points);
     double rise[2] = {0.0, 0.0};
     for (std::size_t k = 0; k < runs.size(); ++k)
         rise[k / 2] += runs[k].ok
