@@ -175,19 +175,18 @@ std::vector<EffectSetFit> fit_pairs(const DiscrepancyContext& context,
     return fit_starts_side_by_side(context, starts, stages);
 }
 
-/// The best kPairs partners of the refined single by their screen on its residual, each fitted
-/// with it from the partner's best grid point and the single's values there (as refined, or
+/// The best kPairs partners by their screen on a refined single's residual, each fitted with its
+/// single from the partner's best grid point and the single's values there (as refined, or
 /// re-adjusted).
-std::vector<EffectSetFit> fit_pairs_on_single(const DiscrepancyContext& context,
-                                              const EffectSetFit& single,
-                                              const std::vector<EffectSetFit>& screened,
-                                              const std::vector<PartnerScreen>& partners,
-                                              StageLog& stages) {
+std::vector<EffectSetFit> fit_pairs_on_singles(const DiscrepancyContext& context,
+                                               const std::vector<EffectSetFit>& screened,
+                                               const std::vector<PartnerScreen>& partners,
+                                               StageLog& stages) {
     std::vector<PairStart> starts;
     for (std::size_t k = 0; k < std::min(kPairs, partners.size()); ++k) {
         const EffectSetFit& partner = screened[partners[k].screened];
-        PairStart p{{single.candidates[0], partner.candidates[0]},
-                    {single.held[0], partner.held[0]},
+        PairStart p{{partners[k].single, partner.candidates[0]},
+                    {partners[k].single_held, partner.held[0]},
                     partners[k].single_values};
         p.start.insert(p.start.end(), partners[k].values.begin(), partners[k].values.end());
         starts.push_back(std::move(p));
@@ -202,6 +201,7 @@ nlohmann::ordered_json partner_screen_json(const std::vector<EffectSetFit>& scre
     nlohmann::ordered_json out = nlohmann::ordered_json::array();
     for (const PartnerScreen& p : partners)
         out.push_back({{"partner", candidate_library()[screened[p.screened].candidates[0]].name},
+                       {"with", candidate_library()[p.single].name},
                        {"values", p.values},
                        {"single_values", p.single_values},
                        {"training_cost", p.training_cost},
@@ -321,20 +321,60 @@ std::optional<std::size_t> join_pairs(const DiscrepancyContext& context,
     return std::nullopt;
 }
 
-/// The partners of `best` screened on its residual (screen_partners), written into `pair_test`;
-/// none when the best removes less than kMinScreenedPartnerGain of the excess `best` leaves. Not
-/// on windows (long runs: the 10-minute recording's budget).
+/// The single that comes second may be the one a partner completes: the best single can settle
+/// where it stands in for the missing partner. Seen on the sweep's hidden EI factor 0.85 with
+/// viscous friction 0.001 s/mm on procedure C: `ei_profile` walked to (0.856, 1.246) explains
+/// 76 % and no partner completes it (with viscous friction, held-out 286), while `ei_scale` (56 %)
+/// with viscous friction is the truth. So the runner-up's partners are screened too when it
+/// explains at least kRunnerUpShare of what the best explains.
+constexpr double kRunnerUpShare = 0.5;
+
+/// The singles whose partners are screened: the best, and the best other single effect when it
+/// explains enough beside it.
+std::vector<const EffectSetFit*> singles_to_pair(const DiscrepancyContext& context,
+                                                 const std::vector<EffectSetFit>& candidates) {
+    std::vector<const EffectSetFit*> singles{&candidates.front()};
+    const double best_share = share_of(context, candidates.front());
+    for (std::size_t k = 1; k < candidates.size(); ++k) {
+        const EffectSetFit& f = candidates[k];
+        if (!f.ok || f.candidates.size() != 1 || f.candidates == candidates.front().candidates)
+            continue;
+        if (share_of(context, f) >= kRunnerUpShare * best_share &&
+            share_of(context, f) >= kMinSingleShareForPairs)
+            singles.push_back(&f);
+        break;
+    }
+    return singles;
+}
+
+/// The partners of each of `singles` screened on its residual (screen_partners), best first,
+/// written into `pair_test`; none when the best removes less than kMinScreenedPartnerGain of the
+/// excess the best single (the first) leaves. Not on windows (long runs: the 10-minute
+/// recording's budget).
 std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
-                                             const EffectSetFit& best,
+                                             const std::vector<const EffectSetFit*>& singles,
                                              const std::vector<EffectSetFit>& screened,
                                              nlohmann::ordered_json& pair_test, StageLog& stages) {
     if (context.evaluator.windowed()) {
         pair_test["partner_screen"] = "not run: fitted on windows";
         return {};
     }
-    stages.start("screening partners of " + candidate_library()[best.candidates[0]].name,
+    std::string names;
+    for (const EffectSetFit* f : singles)
+        names += (names.empty() ? "" : " and ") + candidate_library()[f->candidates[0]].name;
+    stages.start("screening partners of " + names,
                  (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
-    std::vector<PartnerScreen> partners = screen_partners(context, best, screened);
+    std::vector<PartnerScreen> partners;
+    for (const EffectSetFit* f : singles) {
+        std::vector<PartnerScreen> more = screen_partners(context, *f, screened);
+        partners.insert(partners.end(), std::make_move_iterator(more.begin()),
+                        std::make_move_iterator(more.end()));
+    }
+    std::stable_sort(partners.begin(), partners.end(),
+                     [](const PartnerScreen& a, const PartnerScreen& b) {
+                         return a.training_cost < b.training_cost;
+                     });
+    const EffectSetFit& best = *singles.front();
     const double cost = context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
     const double excess = cost - training_noise_floor(context);
     const double screened_gain = partners.empty() || !(excess > 0.0)
@@ -367,14 +407,16 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
             {"threshold", kMinPartnerGain}};
         // The score test is linear at the model as given; measure as well, on the single's
         // residual, what each partner's screen removes.
-        partners = measured_partners(context, best, screened, out.pair_test, stages);
+        partners = measured_partners(context, singles_to_pair(context, candidates), screened,
+                                     out.pair_test, stages);
         out.pair_test["pairs_tried"] = partner_gain >= kMinPartnerGain || !partners.empty();
     } else if (!single_explains && may_pair) {
         // A single that explains something but too little may be one of two (a hidden EI factor
         // 0.85 with viscous friction 0.001 s/mm on procedure B: ei_scale alone explains 65 %): its
         // partners measured on its residual, else the pairs the linearised joint step ranks first.
         out.pair_test = {{"why", "the best single effect explains too little alone"}};
-        partners = measured_partners(context, best, screened, out.pair_test, stages);
+        partners = measured_partners(context, singles_to_pair(context, candidates), screened,
+                                     out.pair_test, stages);
         out.pair_test["pairs_tried"] = true;
     }
     if (single_explains &&
@@ -383,7 +425,7 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
     } else if (may_pair) {
         std::vector<EffectSetFit> pairs =
             partners.empty() ? fit_pairs(context, screened, stages)
-                             : fit_pairs_on_single(context, best, screened, partners, stages);
+                             : fit_pairs_on_singles(context, screened, partners, stages);
         demote_neutral_members(context, pairs);
         out.pair_test["members_refitted_alone"] = refit_members_alone(context, pairs, stages);
         out.chosen = join_pairs(context, std::move(pairs), candidates);

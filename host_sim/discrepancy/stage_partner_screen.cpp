@@ -188,7 +188,8 @@ void readjust_single(const DiscrepancyContext& context, const EffectSetFit& sing
             Eigen::VectorXd residual = context.residuals(runs[k], SampleSet::fit_training);
             const double cost = residual.squaredNorm();
             const PartnerPoint& p = points[next[k].point];
-            keep_best(best, {p.screened_index, p.values, cost, next[k].values, true});
+            keep_best(best,
+                      {p.screened_index, p.values, cost, next[k].values, true, s, single.held[0]});
             if (cost < 2.0 * single_cost)
                 current.push_back({next[k].point, std::move(next[k].values), std::move(residual)});
         }
@@ -225,7 +226,7 @@ std::vector<PartnerScreen> screen_partners(const DiscrepancyContext& context,
         if (!runs[r].ok) continue;
         Eigen::VectorXd residual = context.residuals(runs[r], SampleSet::fit_training);
         keep_best(best, {points[r].screened_index, points[r].values, residual.squaredNorm(),
-                         single.values, false});
+                         single.values, false, s, single.held[0]});
         measured.push_back({r, single.values, std::move(residual)});
     }
     // Then each partner point again with the single re-adjusted.

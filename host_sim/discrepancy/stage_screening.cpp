@@ -190,26 +190,66 @@ Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumn
 }
 
 /// Every candidate's grid (screen_grid) but its all-neutral point (the model as given), as
-/// truth_effects lists for training runs, with the candidate and point each is for.
+/// truth_effects lists for training runs, with the candidate and point each is for. A point that
+/// is a nested richer candidate's grid point too (ei_scale f is ei_profile (f, f), the same model
+/// run bit for bit) is run once: it is an alias of the richer's run.
 struct GridRuns {
     std::vector<std::vector<std::vector<double>>> points;  // per candidate; empty: no grid
     std::vector<nlohmann::json> lists;
     std::vector<std::pair<std::size_t, std::size_t>> of;  // (candidate, point)
+    struct Alias {
+        std::size_t candidate = 0, point = 0;  ///< the simpler's point
+        std::size_t run = 0;                   ///< index into lists
+    };
+    std::vector<Alias> aliases;
 };
+
+/// The run of a richer candidate's grid point that is `simpler`'s `point`, if one is listed.
+std::optional<std::size_t> nested_run(const GridRuns& g, std::size_t simpler,
+                                      const std::vector<double>& point) {
+    for (std::size_t r = 0; r < g.points.size(); ++r) {
+        const std::vector<double> as_richer = nested_start(r, simpler, point);
+        if (as_richer.empty()) continue;
+        for (std::size_t k = 0; k < g.of.size(); ++k)
+            if (g.of[k].first == r && g.points[r][g.of[k].second] == as_richer) return k;
+    }
+    return std::nullopt;
+}
 
 GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool>& carried,
                    bool coarse) {
     const std::vector<Candidate>& library = candidate_library();
     GridRuns g;
     g.points.resize(library.size());
+    for (std::size_t c = 0; c < library.size(); ++c)
+        if (!carried[c]) g.points[c] = screen_grid(library[c].parameters, coarse);
+    std::vector<std::pair<std::size_t, std::size_t>> simpler_points;
     for (std::size_t c = 0; c < library.size(); ++c) {
-        if (carried[c]) continue;
-        g.points[c] = screen_grid(library[c].parameters, coarse);
+        const bool nested_in_another = [&] {
+            for (std::size_t r = 0; r < library.size(); ++r)
+                if (!carried[r] && !g.points[c].empty() &&
+                    !nested_start(r, c, g.points[c][0]).empty())
+                    return true;
+            return false;
+        }();
         for (std::size_t k = 1; k < g.points[c].size(); ++k) {
+            if (nested_in_another) {
+                simpler_points.emplace_back(c, k);
+                continue;
+            }
             g.lists.push_back(
                 nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
             g.of.emplace_back(c, k);
         }
+    }
+    for (const auto& [c, k] : simpler_points) {
+        if (const std::optional<std::size_t> run = nested_run(g, c, g.points[c][k])) {
+            g.aliases.push_back({c, k, *run});
+            continue;
+        }
+        g.lists.push_back(
+            nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
+        g.of.emplace_back(c, k);
     }
     return g;
 }
@@ -296,6 +336,11 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         grid_costs[c][point] = training_cost(runs[run]);
         grid_run[c][point] = run;
     }
+    for (const GridRuns::Alias& a : grid.aliases) {
+        const std::size_t run = steps.lists.size() + a.run;
+        grid_costs[a.candidate][a.point] = training_cost(runs[run]);
+        grid_run[a.candidate][a.point] = run;
+    }
     Json report = Json::array();
     std::vector<std::size_t> needs_held_out;  // candidates started from a grid point, on windows
     for (std::size_t c = 0; c < library.size(); ++c) {
@@ -314,8 +359,8 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         if (g.profile.size() == 1) f.screen_profile = g.profile[0];
         if (from_grid) {
             f.values = g.points[g.best];
-            f.effects = grid.lists[grid_run[c][g.best] - steps.lists.size()];
-            f.prediction = std::move(runs[grid_run[c][g.best]]);
+            f.effects = nlohmann::json::array({library[c].entry(f.values, f.held[0])});
+            f.prediction = runs[grid_run[c][g.best]];  // a copy: an alias shares its run
             if (context.evaluator.windowed()) needs_held_out.push_back(c);
         } else if (step_run[c]) {
             f.effects = steps.lists[*step_run[c]];

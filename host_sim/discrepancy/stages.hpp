@@ -112,6 +112,8 @@ struct PartnerScreen {
     /// The single's values there: its refined ones, or re-adjusted (`readjusted`).
     std::vector<double> single_values;
     bool readjusted = false;
+    std::size_t single = 0;      ///< the single's candidate (index into the library)
+    nlohmann::json single_held;  ///< and its held parameters
 };
 std::vector<PartnerScreen> screen_partners(const DiscrepancyContext& context,
                                            const EffectSetFit& single,
@@ -123,7 +125,8 @@ struct PairsOutcome {
 };
 /// Pairs: names the best single effect when it explains enough and leaves nothing significant.
 /// When it explains enough and leaves an output significant, screens the partners on its residual
-/// (screen_partners) and fits it with the two best of them when the best removes enough (else,
+/// (screen_partners; on the runner-up single's too when it explains at least half as much) and
+/// fits the two best single-and-partner points when the best removes enough (else,
 /// when the score test predicts enough, the pairs below); when it explains too little but
 /// something, fits the two pairs best by their linearised joint step side by side. Names the best
 /// pair when it does better. Adds the pairs to `candidates` (ahead of the singles when chosen).
