@@ -223,6 +223,11 @@ GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool
     g.points.resize(library.size());
     for (std::size_t c = 0; c < library.size(); ++c)
         if (!carried[c]) g.points[c] = screen_grid(library[c].parameters, coarse);
+    auto add_run = [&](std::size_t c, std::size_t k) {
+        g.lists.push_back(
+            nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
+        g.of.emplace_back(c, k);
+    };
     std::vector<std::pair<std::size_t, std::size_t>> simpler_points;
     for (std::size_t c = 0; c < library.size(); ++c) {
         const bool nested_in_another = [&] {
@@ -233,23 +238,17 @@ GridRuns grid_runs(const std::vector<EffectSetFit>& fits, const std::vector<bool
             return false;
         }();
         for (std::size_t k = 1; k < g.points[c].size(); ++k) {
-            if (nested_in_another) {
+            if (nested_in_another)
                 simpler_points.emplace_back(c, k);
-                continue;
-            }
-            g.lists.push_back(
-                nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
-            g.of.emplace_back(c, k);
+            else
+                add_run(c, k);
         }
     }
     for (const auto& [c, k] : simpler_points) {
-        if (const std::optional<std::size_t> run = nested_run(g, c, g.points[c][k])) {
+        if (const std::optional<std::size_t> run = nested_run(g, c, g.points[c][k]))
             g.aliases.push_back({c, k, *run});
-            continue;
-        }
-        g.lists.push_back(
-            nlohmann::json::array({library[c].entry(g.points[c][k], fits[c].held[0])}));
-        g.of.emplace_back(c, k);
+        else
+            add_run(c, k);
     }
     return g;
 }
