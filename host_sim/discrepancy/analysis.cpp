@@ -17,6 +17,10 @@ bool is_held_out_block(int block) {
     return block % 3 == 1;
 }
 
+bool is_screening_block(int block) {
+    return block % 3 == 0;
+}
+
 bool in_set(const MeasuredRecording& data, double t, SampleSet set) {
     if (set == SampleSet::all) return true;
     if (set == SampleSet::fit_training || set == SampleSet::fit_held_out) {

@@ -25,6 +25,10 @@ inline constexpr int kBlocks = 10;
 /// The block (0 .. kBlocks - 1) a recording time falls in.
 int block_of(const MeasuredRecording& data, double time_s);
 bool is_held_out_block(int block);
+/// The training blocks the screening's grid is costed on when fitted on windows (0, 3, 6, 9: four
+/// of the seven, spread over the recording): the grid only picks a start, and on a long recording
+/// it is most of the screening's runs (host_sim/discrepancy/README.md, the 10-minute bench).
+bool is_screening_block(int block);
 
 /// fit_training and fit_held_out: the training / held-out samples within the fits' scored spans
 /// (MeasuredRecording::fit_spans_s; all of them when it is empty).

@@ -1,6 +1,8 @@
 #include "host_sim/discrepancy/candidates.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "host_sim/discrepancy/analysis.hpp"
 
@@ -26,14 +28,40 @@ std::function<nlohmann::json(const MeasuredRecording&, const ModelPrediction&)> 
 
 }  // namespace
 
-PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
-                                             const ModelPrediction& baseline,
-                                             const std::vector<double>& sigma) {
-    PeriodicResidual best;
-    double best_power = -1.0;
+namespace {
+
+/// The residuals' periodogram: power and scatter of the position residuals per grid frequency.
+/// The grid reaches `extension_Hz` beyond the searched band on both sides (down to 0.01 Hz), so
+/// that a line near the band's ends has a neighbourhood on both sides; [first, last] is the band.
+struct Periodogram {
+    std::vector<double> frequency_Hz, power;
+    std::vector<Eigen::Matrix3d> scatter;
+    std::size_t first = 0, last = 0;
+};
+
+/// The 0.01 Hz grid: the band's points accumulated from its low end (as the band was always
+/// stepped), and the extension's points below and above it.
+std::vector<double> periodogram_grid(double extension_Hz, std::size_t& first, std::size_t& last) {
+    std::vector<double> grid;
+    for (int j = static_cast<int>(std::round(extension_Hz / 0.01)); j >= 1; --j)
+        if (const double f = kPeriodicLow_Hz - 0.01 * j; f >= 0.01 - 1e-9) grid.push_back(f);
+    first = grid.size();
+    double f = kPeriodicLow_Hz;
+    for (; f <= kPeriodicHigh_Hz + 1e-9; f += 0.01)
+        grid.push_back(f);
+    last = grid.size() - 1;
+    for (; f <= kPeriodicHigh_Hz + extension_Hz + 1e-9; f += 0.01)
+        grid.push_back(f);
+    return grid;
+}
+
+Periodogram residual_periodogram(const MeasuredRecording& data, const ModelPrediction& baseline,
+                                 const std::vector<double>& sigma, double extension_Hz) {
+    Periodogram pg;
+    pg.frequency_Hz = periodogram_grid(extension_Hz, pg.first, pg.last);
     // Least-squares sinusoid amplitudes (a periodogram for uneven samples) on a 0.01 Hz grid, of
     // every assessed output's residual in units of its noise; the direction from the positions.
-    for (double f = 0.05; f <= 2.0 + 1e-9; f += 0.01) {
+    for (const double f : pg.frequency_Hz) {
         const double w = 2.0 * M_PI * f;
         double power = 0.0;
         Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
@@ -52,16 +80,74 @@ PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
             power += s.squaredNorm() + c.squaredNorm();
             if (m.components == 3) scatter += s * s.transpose() + c * c.transpose();
         }
-        if (power > best_power) {
-            best_power = power;
-            best.frequency_Hz = f;
-            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-            best.direction = eig.eigenvectors().col(2);
-            Eigen::Index k = 0;
-            best.direction.cwiseAbs().maxCoeff(&k);
-            if (best.direction[k] < 0.0) best.direction = -best.direction;
+        pg.power.push_back(power);
+        pg.scatter.push_back(scatter);
+    }
+    return pg;
+}
+
+/// The band's grid index of the largest power within half_width of `around` (the whole band
+/// when half_width is infinite); the first of equals.
+std::size_t strongest(const Periodogram& pg, double around, double half_width) {
+    std::size_t best = pg.first;
+    double best_power = -1.0;
+    for (std::size_t k = pg.first; k <= pg.last; ++k)
+        if (std::abs(pg.frequency_Hz[k] - around) <= half_width + 1e-9 &&
+            pg.power[k] > best_power) {
+            best_power = pg.power[k];
+            best = k;
+        }
+    return best;
+}
+
+/// The most prominent line in the band: the grid index whose power stands highest over the
+/// median power of its neighbourhood (beyond its own main lobe, `lobe_Hz`, up to `band_Hz` away).
+std::size_t most_prominent(const Periodogram& pg, double lobe_Hz, double band_Hz) {
+    std::size_t best = pg.first;
+    double best_ratio = -1.0;
+    std::vector<double> around;
+    for (std::size_t k = pg.first; k <= pg.last; ++k) {
+        around.clear();
+        for (std::size_t j = 0; j < pg.power.size(); ++j) {
+            const double d = std::abs(pg.frequency_Hz[j] - pg.frequency_Hz[k]);
+            if (d > lobe_Hz + 1e-9 && d <= band_Hz + 1e-9) around.push_back(pg.power[j]);
+        }
+        if (around.empty()) continue;
+        auto mid = around.begin() + static_cast<std::ptrdiff_t>(around.size() / 2);
+        std::nth_element(around.begin(), mid, around.end());
+        const double ratio = pg.power[k] / std::max(*mid, 1e-300);
+        if (ratio > best_ratio) {
+            best_ratio = ratio;
+            best = k;
         }
     }
+    return best;
+}
+
+}  // namespace
+
+PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
+                                             const ModelPrediction& baseline,
+                                             const std::vector<double>& sigma) {
+    const double span_s = std::max(data.end_s - data.start_s, 1e-3);
+    // The main lobe of a line is about 1/span wide; its neighbourhood reaches 4/span (at least
+    // 0.02 and 0.1 Hz). Only when that neighbourhood holds enough independent frequency cells
+    // (1/span each) is its median a continuum to stand a line against: then the most prominent
+    // line, at its lobe's strongest power. On a short recording, the strongest power in the band.
+    const double lobe_Hz = std::max(0.02, 1.0 / span_s);
+    const double band_Hz = std::max(0.1, 4.0 / span_s);
+    const bool continuum = 2.0 * (band_Hz - lobe_Hz) * span_s >= kMinContinuumCells;
+    const Periodogram pg = residual_periodogram(data, baseline, sigma, continuum ? band_Hz : 0.0);
+    const std::size_t k =
+        continuum ? strongest(pg, pg.frequency_Hz[most_prominent(pg, lobe_Hz, band_Hz)], lobe_Hz)
+                  : strongest(pg, 0.0, std::numeric_limits<double>::infinity());
+    PeriodicResidual best;
+    best.frequency_Hz = pg.frequency_Hz[k];
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(pg.scatter[k]);
+    best.direction = eig.eigenvectors().col(2);
+    Eigen::Index axis = 0;
+    best.direction.cwiseAbs().maxCoeff(&axis);
+    if (best.direction[axis] < 0.0) best.direction = -best.direction;
     return best;
 }
 

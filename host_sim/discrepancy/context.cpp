@@ -42,6 +42,12 @@ DiscrepancyContext::DiscrepancyContext(const MeasuredRecording& recording,
     training_rows = block_rows(data, sigma, SampleSet::fit_training);
 }
 
+double DiscrepancyContext::screening_cost(const ModelPrediction& p) const {
+    return capped_cost_on_blocks(training_rows,
+                                 normalised_residuals(data, p, sigma, SampleSet::fit_training),
+                                 is_screening_block);
+}
+
 void DiscrepancyContext::run_model_as_given(const std::function<void(double)>& progress) {
     baseline = evaluator.run_baseline(windows, progress);
     if (!baseline.ok)

@@ -11,6 +11,18 @@ namespace scopekin::discrepancy {
 Evaluator::Evaluator(const ModelSpec& model, const MeasuredRecording& data, unsigned threads)
     : model_(model), data_(data), threads_(std::max(1U, threads)) {}
 
+bool window_in_scope(int block, RunScope scope) {
+    switch (scope) {
+        case RunScope::fit_training: return !is_held_out_block(block);
+        case RunScope::fit_held_out: return is_held_out_block(block);
+        case RunScope::fit_screening: return is_screening_block(block);
+        case RunScope::fit_after_screening: return !is_screening_block(block);
+        case RunScope::full:
+        case RunScope::fit_all: break;
+    }
+    return true;
+}
+
 ModelPrediction Evaluator::run_baseline(std::vector<RunWindow> windows,
                                         const std::function<void(double)>& progress) {
     ++runs_;
@@ -63,10 +75,7 @@ std::vector<ModelPrediction> Evaluator::run_all(
         }
         std::vector<std::size_t> which;
         for (std::size_t w = 0; w < windows_.size(); ++w)
-            if (requests[r].second == RunScope::fit_all ||
-                is_held_out_block(windows_[w].block) ==
-                    (requests[r].second == RunScope::fit_held_out))
-                which.push_back(w);
+            if (window_in_scope(windows_[w].block, requests[r].second)) which.push_back(w);
         const std::size_t n = std::min(parts, which.size());
         for (std::size_t part = 0; part < n; ++part) {
             Task t{r, {}};

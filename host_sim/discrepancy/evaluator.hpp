@@ -17,13 +17,19 @@
 namespace scopekin::discrepancy {
 
 /// What a run covers: the whole recording, or (with fit windows) the training windows, the
-/// held-out ones, or all windows. Without windows every run is a full run.
+/// held-out ones, all windows, the screening's (is_screening_block) or all but those. Without
+/// windows every run is a full run.
 enum class RunScope {
     full,
     fit_training,
     fit_held_out,
-    fit_all
+    fit_all,
+    fit_screening,
+    fit_after_screening
 };
+
+/// Whether a window of `block` is run in `scope` (a windowed scope).
+bool window_in_scope(int block, RunScope scope);
 
 /// Copies `from`'s outputs where it has them (not NaN) into `into`: the parts of a windowed run.
 void merge_outputs(const ModelPrediction& from, ModelPrediction& into);

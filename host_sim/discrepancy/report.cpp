@@ -133,7 +133,9 @@ Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
              {"unit", "Hz"},
              {"sd", nullptr},
              {"fitted", false},
-             {"how", "read off the residual (its strongest periodic component, 0.01 Hz grid)"}});
+             {"how",
+              "read off the residual's periodogram (0.05-2 Hz, 0.01 Hz grid: the strongest power, "
+              "or on a recording of 100 s or more the most prominent line)"}});
         const double polar = fit.values[at + 2], azimuth = fit.values[at + 3];
         params.push_back({{"name", "direction"},
                           {"value",

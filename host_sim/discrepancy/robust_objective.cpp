@@ -51,4 +51,13 @@ Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
     return r;
 }
 
+double capped_cost_on_blocks(BlockRows rows, Eigen::VectorXd r, bool (*keep)(int block)) {
+    if (static_cast<std::size_t>(r.size()) != rows.block_of_row.size()) return r.squaredNorm();
+    for (int b = 0; b < kBlocks; ++b)
+        if (!keep(b)) rows.noise_floor[static_cast<std::size_t>(b)] = 0.0;
+    for (Eigen::Index k = 0; k < r.size(); ++k)
+        if (!keep(rows.block_of_row[static_cast<std::size_t>(k)])) r[k] = 0.0;
+    return cap_outlier_blocks(rows, std::move(r)).squaredNorm();
+}
+
 }  // namespace scopekin::discrepancy

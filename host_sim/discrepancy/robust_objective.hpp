@@ -39,4 +39,8 @@ BlockRows block_rows(const MeasuredRecording& data, const std::vector<double>& s
 /// ignored for the median.
 Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r);
 
+/// The capped cost over the blocks `keep` accepts only: the other blocks' rows (a run over the
+/// kept blocks' windows leaves them unrun, NaN) count nothing and take no part in the median.
+double capped_cost_on_blocks(BlockRows rows, Eigen::VectorXd r, bool (*keep)(int block));
+
 }  // namespace scopekin::discrepancy

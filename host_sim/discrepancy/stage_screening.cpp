@@ -306,16 +306,22 @@ Screening screen_candidates(const DiscrepancyContext& context) {
     const Trials steps = gauss_newton_steps(context, n, columns, r0, carried, fits);
     const GridRuns grid = grid_runs(fits, carried, context.evaluator.windowed());
     // One batch: the steps over every window (they are scored as they are), the grid over the
-    // training ones (it only picks a start).
+    // training ones (it only picks a start); on windows over the screening blocks' only, and
+    // every cost the grid is compared with is taken there too.
+    const bool windowed = context.evaluator.windowed();
     std::vector<std::pair<nlohmann::json, RunScope>> requests;
     for (const nlohmann::json& l : steps.lists)
         requests.emplace_back(l, RunScope::fit_all);
     for (const nlohmann::json& l : grid.lists)
-        requests.emplace_back(l, RunScope::fit_training);
+        requests.emplace_back(l, windowed ? RunScope::fit_screening : RunScope::fit_training);
     std::vector<ModelPrediction> runs = context.evaluator.run_all(requests);
     auto training_cost = [&](const ModelPrediction& p) {
         return p.ok ? context.residuals(p, SampleSet::fit_training).squaredNorm()
                     : std::numeric_limits<double>::infinity();
+    };
+    auto grid_cost = [&](const ModelPrediction& p) {
+        if (!windowed) return training_cost(p);
+        return p.ok ? context.screening_cost(p) : std::numeric_limits<double>::infinity();
     };
 
     // Each candidate's start: its Gauss-Newton step, or the grid's best point when that costs less.
@@ -327,21 +333,21 @@ Screening screen_candidates(const DiscrepancyContext& context) {
     for (std::size_t c = 0; c < library.size(); ++c) {
         grid_costs[c].assign(grid.points[c].size(), std::numeric_limits<double>::infinity());
         grid_run[c].assign(grid.points[c].size(), 0);
-        if (!grid.points[c].empty()) grid_costs[c][0] = r0.squaredNorm();
+        if (!grid.points[c].empty()) grid_costs[c][0] = grid_cost(context.baseline);
     }
     for (std::size_t k = 0; k < grid.of.size(); ++k) {
         const auto [c, point] = grid.of[k];
         const std::size_t run = steps.lists.size() + k;
-        grid_costs[c][point] = training_cost(runs[run]);
+        grid_costs[c][point] = grid_cost(runs[run]);
         grid_run[c][point] = run;
     }
     for (const GridRuns::Alias& a : grid.aliases) {
         const std::size_t run = steps.lists.size() + a.run;
-        grid_costs[a.candidate][a.point] = training_cost(runs[run]);
+        grid_costs[a.candidate][a.point] = grid_cost(runs[run]);
         grid_run[a.candidate][a.point] = run;
     }
     Json report = Json::array();
-    std::vector<std::size_t> needs_held_out;  // candidates started from a grid point, on windows
+    std::vector<std::size_t> needs_rest;  // candidates started from a grid point, on windows
     for (std::size_t c = 0; c < library.size(); ++c) {
         EffectSetFit& f = fits[c];
         if (carried[c]) {
@@ -352,15 +358,17 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         const std::vector<double> step = f.values;
         const double step_cost = step_run[c] ? training_cost(runs[*step_run[c]])
                                              : std::numeric_limits<double>::infinity();
+        const double step_grid_cost =
+            step_run[c] ? grid_cost(runs[*step_run[c]]) : std::numeric_limits<double>::infinity();
         const GridScreen g = summarise_grid(library[c].parameters, grid.points[c], grid_costs[c]);
-        const bool from_grid = !g.points.empty() && g.best != 0 && g.costs[g.best] < step_cost;
+        const bool from_grid = !g.points.empty() && g.best != 0 && g.costs[g.best] < step_grid_cost;
         f.iterations = 1;
         if (g.profile.size() == 1) f.screen_profile = g.profile[0];
         if (from_grid) {
             f.values = g.points[g.best];
             f.effects = nlohmann::json::array({library[c].entry(f.values, f.held[0])});
             f.prediction = runs[grid_run[c][g.best]];  // a copy: an alias shares its run
-            if (context.evaluator.windowed()) needs_held_out.push_back(c);
+            if (windowed) needs_rest.push_back(c);
         } else if (step_run[c]) {
             f.effects = steps.lists[*step_run[c]];
             f.prediction = std::move(runs[*step_run[c]]);
@@ -371,21 +379,24 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         else if (f.failure.empty())
             f.failure = f.prediction.failure;
         report.push_back(screening_json(library[c], step, step_cost, g, from_grid, f.values));
+        if (windowed)
+            report.back()["gauss_newton_step"]["screening_blocks_cost"] =
+                std::isfinite(step_grid_cost) ? Json(step_grid_cost) : Json(nullptr);
     }
-    // The grid ran on the training windows only: the held-out windows at the chosen points.
-    std::vector<nlohmann::json> held_out_lists;
-    for (std::size_t c : needs_held_out)
-        held_out_lists.push_back(fits[c].effects);
-    const std::vector<ModelPrediction> held_out =
-        context.evaluator.run_all(held_out_lists, RunScope::fit_held_out);
-    for (std::size_t k = 0; k < needs_held_out.size(); ++k) {
-        EffectSetFit& f = fits[needs_held_out[k]];
-        if (!held_out[k].ok) {
+    // The grid ran on the screening blocks' windows only: the other windows at the chosen points.
+    std::vector<nlohmann::json> rest_lists;
+    for (std::size_t c : needs_rest)
+        rest_lists.push_back(fits[c].effects);
+    const std::vector<ModelPrediction> rest =
+        context.evaluator.run_all(rest_lists, RunScope::fit_after_screening);
+    for (std::size_t k = 0; k < needs_rest.size(); ++k) {
+        EffectSetFit& f = fits[needs_rest[k]];
+        if (!rest[k].ok) {
             f.ok = false;
-            f.failure = held_out[k].failure;
+            f.failure = rest[k].failure;
             continue;
         }
-        merge_outputs(held_out[k], f.prediction);
+        merge_outputs(rest[k], f.prediction);
     }
     for (EffectSetFit& f : fits) {
         if (!f.ok) continue;
@@ -397,6 +408,11 @@ Screening screen_candidates(const DiscrepancyContext& context) {
                    "every candidate from the model as given: one Gauss-Newton step (a shared "
                    "forward-difference Jacobian), and a coarse grid over each parameter's range "
                    "(training data only); the lower training cost is the start refined"},
+                  {"grid_costed_on",
+                   windowed ? "the training windows of blocks 0, 3, 6, 9 (fitted on windows: the "
+                              "grid's costs, the model as given's and each step's "
+                              "screening_blocks_cost there)"
+                            : "the training data"},
                   {"baseline_training_cost", r0.squaredNorm()},
                   {"candidates", report}};
     return out;

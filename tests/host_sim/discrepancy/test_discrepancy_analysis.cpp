@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "host_sim/discrepancy/analysis.hpp"
+#include "host_sim/discrepancy/evaluator.hpp"
 #include "host_sim/discrepancy/fit_windows.hpp"
 #include "host_sim/discrepancy/measured_recording.hpp"
 #include "host_sim/discrepancy/model_run.hpp"
@@ -185,6 +187,48 @@ TEST(DiscrepancyAnalysis, AnOutlierBlockIsCappedAndASmoothMisfitIsNot) {
     EXPECT_EQ(cap_outlier_blocks(rows, normalised_residuals(d, exact, sigma, SampleSet::training))
                   .squaredNorm(),
               0.0);
+}
+
+// On windows the screening's grid is costed on four of the seven training blocks (0, 3, 6, 9),
+// spread over the recording, none held out; a grid start then runs the other windows. The cost
+// there is the capped cost of those blocks alone: the other blocks' rows, unrun (NaN), count
+// nothing and take no part in the median, and a block that stands out is capped as before.
+TEST(DiscrepancyAnalysis, TheScreeningBlocksCostAloneWithTheirOwnCap) {
+    std::vector<int> screening;
+    for (int b = 0; b < kBlocks; ++b) {
+        if (is_screening_block(b)) screening.push_back(b);
+        EXPECT_FALSE(is_screening_block(b) && is_held_out_block(b)) << b;
+        EXPECT_NE(window_in_scope(b, RunScope::fit_screening),
+                  window_in_scope(b, RunScope::fit_after_screening))
+            << b;
+    }
+    EXPECT_EQ(screening, (std::vector<int>{0, 3, 6, 9}));
+    const MeasuredRecording d = extract_measured_recording(make_recording(20.0, 0.5), "r.csv");
+    const std::vector<double> sigma{0.866, 0.0, 0.0};
+    const BlockRows rows = block_rows(d, sigma, SampleSet::training);
+    ModelPrediction run;  // exact in the screening blocks, unrun elsewhere
+    run.ok = true;
+    for (const MeasuredSeries& m : d.outputs)
+        run.outputs.push_back(m.value);
+    const MeasuredSeries& tip = d.outputs[0];
+    for (std::size_t i = 0; i < tip.time_s.size(); ++i)
+        if (!is_screening_block(block_of(d, tip.time_s[i])))
+            run.outputs[0][i].x() = std::numeric_limits<double>::quiet_NaN();
+    auto cost = [&](const ModelPrediction& p) {
+        return capped_cost_on_blocks(rows, normalised_residuals(d, p, sigma, SampleSet::training),
+                                     is_screening_block);
+    };
+    EXPECT_EQ(cost(run), 0.0);
+    // 1 mm off in block 3 only: (1/0.866)^2 of its share, below its cap of ten noise floors.
+    ModelPrediction small = run, large = run;
+    for (std::size_t i = 0; i < tip.time_s.size(); ++i)
+        if (block_of(d, tip.time_s[i]) == 3) {
+            small.outputs[0][i].x() += 1.0;
+            large.outputs[0][i].x() += 3.0;
+        }
+    EXPECT_NEAR(cost(small), std::pow(1.0 / 0.866, 2) * rows.noise_floor[3], 1e-9);
+    // 3 mm off there, (3/0.866)^2 = 12 floors: capped at ten, the other screening blocks exact.
+    EXPECT_NEAR(cost(large), kBlockCapOverNoise * rows.noise_floor[3], 1e-9);
 }
 
 // Windows: one per block where the hand moves most, the first part spin-up; none when the
