@@ -7,8 +7,8 @@
 // Held parameters (stated, host_sim/discrepancy/README.md): viscoadhesive_friction's cap
 // max_friction_increase (0.25), mesenteric_retraction's exponent (1), ei_profile's bending
 // section (none). sigmoid_mobility is linear in A cos(phi) and A sin(phi) for a given frequency
-// and direction; those two are fitted, and the frequency is read off the
-// residual first (its periodic component, 0.05-2 Hz: strongest_periodic_residual). The direction d (polar angle from
+// and direction; those two are fitted, and the frequency is read off the residual first (its
+// periodic component, 0.05-2 Hz: strongest_periodic_residual). The direction d (polar angle from
 // +z, azimuth from +x) is fitted too; its first value comes from the screening: the load
 // u sin(w t) + v cos(w t) is linear in the vectors u, v (six runs along the axes), and
 // u = A cos(phi) d, v = A sin(phi) d is its best rank-one approximation (SVD).
@@ -64,6 +64,13 @@ std::vector<double> nested_start(std::size_t c, std::size_t simpler,
 std::vector<std::vector<double>> nested_projections(std::size_t c, std::size_t simpler,
                                                     const std::vector<double>& values);
 
+/// Sigmoid mobility's frequency is searched in [kPeriodicLow_Hz, kPeriodicHigh_Hz] [Hz].
+inline constexpr double kPeriodicLow_Hz = 0.05;
+inline constexpr double kPeriodicHigh_Hz = 2.0;
+/// Independent frequency cells (1/span wide) a line's neighbourhood must hold for its median to
+/// be a continuum: 16 from a 100 s recording on (a 22-60 s one has 6-10).
+inline constexpr double kMinContinuumCells = 16.0;
+
 /// The periodic component of the baseline's residuals (every assessed output, in units of its
 /// noise) that a sigmoid motion would leave: frequency [Hz] in 0.05-2 Hz, and the principal
 /// direction of the position residuals at it (unit, colon frame; a first guess: the screening
@@ -72,11 +79,6 @@ std::vector<std::vector<double>> nested_projections(std::size_t c, std::size_t s
 /// procedure's own misfit is a low-frequency continuum (its cycles' harmonics) that can hold more
 /// power than a motility line (host_sim/discrepancy/README.md, the 10-minute bench); on a short
 /// one, where a neighbourhood is a few correlated cells, the strongest power.
-inline constexpr double kPeriodicLow_Hz = 0.05;
-inline constexpr double kPeriodicHigh_Hz = 2.0;
-/// Independent frequency cells (1/span wide) a line's neighbourhood must hold for its median to
-/// be a continuum: 16 from a 100 s recording on (a 22-60 s one has 6-10).
-inline constexpr double kMinContinuumCells = 16.0;
 struct PeriodicResidual {
     double frequency_Hz = 0.25;
     Eigen::Vector3d direction = Eigen::Vector3d::UnitY();

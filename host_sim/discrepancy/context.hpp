@@ -46,6 +46,10 @@ struct DiscrepancyContext {
     /// its costs. DiscrepancyInputError if it cannot follow the recording.
     void run_model_as_given(const std::function<void(double)>& progress);
 
+    /// The fits' training cost over the screening blocks only (their rows' capped residuals; the
+    /// other blocks' rows, which a fit_screening run leaves unrun, count nothing).
+    double screening_cost(const ModelPrediction& p) const;
+
     /// normalised_residuals (analysis.hpp) of a prediction against this recording and noise; on
     /// the fits' training samples with outlier blocks capped (robust_objective.hpp), the fits'
     /// objective.
@@ -61,10 +65,6 @@ struct DiscrepancyContext {
     std::vector<double> sigma;  ///< noise SD per output (estimate_noise)
     double noise_floor = 0.0;   ///< held-out cost of noise alone: 1 per assessed output
     BlockRows training_rows;    ///< the fits' training rows' blocks (robust_objective.hpp)
-
-    /// The fits' training cost over the screening blocks only (their rows' capped residuals; the
-    /// other blocks' rows, which a fit_screening run leaves unrun, count nothing).
-    double screening_cost(const ModelPrediction& p) const;
     ModelSpec model;
     Evaluator evaluator;           ///< runs `model` under `data`
     ModelPrediction baseline;      ///< the model as given, whole recording
