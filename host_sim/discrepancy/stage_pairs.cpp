@@ -249,15 +249,46 @@ void demote_neutral_members(const DiscrepancyContext& context, std::vector<Effec
     }
 }
 
+/// Fitted on windows (a long recording), why member `k` of `pair` need not be refitted alone
+/// (empty: it must): it sits within a finite-difference step of the refined best single, so its
+/// fit from there is that single's; or its screening over its plausible range explained less
+/// than kMinSingleShareForPairs, so alone it cannot carry the recording. The 10-minute recording's
+/// budget: on the bench's pair (ei_scale 0.88 + viscous 0.003) the two refits took 12 runs and
+/// 13 s, viscous friction (0.00258 in the pair, 0.00209 refined alone, step 0.002) landed where
+/// its single had, and ei_scale (screened at 0 %) explained nothing alone.
+std::string why_not_refitted_alone(const DiscrepancyContext& context, const EffectSetFit& pair,
+                                   std::size_t k, const std::vector<double>& member_values,
+                                   const EffectSetFit& best_single,
+                                   const std::vector<EffectSetFit>& screened) {
+    if (!context.evaluator.windowed()) return {};
+    const std::size_t c = pair.candidates[k];
+    const std::vector<FittedParameter>& params = candidate_library()[c].parameters;
+    if (best_single.ok && best_single.candidates == std::vector<std::size_t>{c} &&
+        best_single.values.size() == member_values.size()) {
+        bool near = true;
+        for (std::size_t j = 0; j < params.size(); ++j)
+            near = near && std::abs(member_values[j] - best_single.values[j]) <= params[j].step;
+        if (near) return "within a finite-difference step of the refined single: its fit";
+    }
+    if (c < screened.size() && screened[c].ok &&
+        share_of(context, screened[c]) < kMinSingleShareForPairs)
+        return "its screening over its range explained under 10 %: not alone";
+    return {};
+}
+
 /// Is a pair's partner needed, or did it only help the search along? The best pair's members are
 /// each fitted again alone from their part of the pair's values and join the pairs as singles
 /// (join_pairs puts a single where it beats the same effect's fit): a single that comes as close
 /// as the pair leaves the partner nothing to earn. Seen on the sweep's `sigmoid_mobility` 0.008 N/mm
 /// at 0.45 Hz on procedure C: fitted from its screening it explained 91 %, fitted with `ei_profile`
-/// (0.995, 1.053) 99 % with its own values within 1 % of the truth, and the pair was named. Returns
+/// (0.995, 1.053) 99 % with its own values within 1 % of the truth, and the pair was named. On
+/// windows a member need not be refitted where why_not_refitted_alone says so. Returns
 /// report.json's account of the refits.
 nlohmann::ordered_json refit_members_alone(const DiscrepancyContext& context,
-                                           std::vector<EffectSetFit>& pairs, StageLog& stages) {
+                                           std::vector<EffectSetFit>& pairs,
+                                           const EffectSetFit& best_single,
+                                           const std::vector<EffectSetFit>& screened,
+                                           StageLog& stages) {
     nlohmann::ordered_json account = nlohmann::ordered_json::array();
     const auto best = std::min_element(pairs.begin(), pairs.end(), by_held_out);
     if (best == pairs.end() || !best->ok || best->candidates.size() != 2) return account;
@@ -265,14 +296,23 @@ nlohmann::ordered_json refit_members_alone(const DiscrepancyContext& context,
     std::size_t at = 0;
     for (std::size_t k = 0; k < 2; ++k) {
         const std::size_t n = candidate_library()[best->candidates[k]].parameters.size();
-        singles.push_back({{best->candidates[k]},
-                           {best->held[k]},
-                           {best->values.begin() + static_cast<std::ptrdiff_t>(at),
-                            best->values.begin() + static_cast<std::ptrdiff_t>(at + n)}});
+        std::vector<double> values(best->values.begin() + static_cast<std::ptrdiff_t>(at),
+                                   best->values.begin() + static_cast<std::ptrdiff_t>(at + n));
         at += n;
+        const std::string why =
+            why_not_refitted_alone(context, *best, k, values, best_single, screened);
+        if (!why.empty()) {
+            account.push_back({{"effect", candidate_library()[best->candidates[k]].name},
+                               {"refitted", false},
+                               {"why", why}});
+            continue;
+        }
+        singles.push_back({{best->candidates[k]}, {best->held[k]}, std::move(values)});
     }
+    if (singles.empty()) return account;
     for (EffectSetFit& single : fit_starts_side_by_side(context, singles, stages)) {
         account.push_back({{"effect", candidate_library()[single.candidates[0]].name},
+                           {"refitted", true},
                            {"ok", single.ok},
                            {"held_out_cost", single.held_out_cost},
                            {"share", single.ok ? share_of(context, single) : 0.0}});
@@ -427,7 +467,8 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
             partners.empty() ? fit_pairs(context, screened, stages)
                              : fit_pairs_on_singles(context, screened, partners, stages);
         demote_neutral_members(context, pairs);
-        out.pair_test["members_refitted_alone"] = refit_members_alone(context, pairs, stages);
+        out.pair_test["members_refitted_alone"] =
+            refit_members_alone(context, pairs, best, screened, stages);
         out.chosen = join_pairs(context, std::move(pairs), candidates);
     }
     return out;

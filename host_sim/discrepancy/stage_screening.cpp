@@ -4,6 +4,7 @@
 #include <optional>
 #include <utility>
 
+#include "host_sim/discrepancy/ranking.hpp"
 #include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
@@ -398,11 +399,15 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         }
         merge_outputs(rest[k], f.prediction);
     }
-    for (EffectSetFit& f : fits) {
+    for (std::size_t c = 0; c < library.size(); ++c) {
+        EffectSetFit& f = fits[c];
         if (!f.ok) continue;
         f.training_cost = context.residuals(f.prediction, SampleSet::fit_training).squaredNorm();
         f.held_out_cost = context.residuals(f.prediction, SampleSet::fit_held_out).squaredNorm();
         f.bic = bic_of(context, f.prediction, f.values.size());
+        // What the start explains: the refinement and the pairs decide on it.
+        report[c]["held_out_cost"] = f.held_out_cost;
+        report[c]["share_explained"] = share_of(context, f);
     }
     out.report = {{"rule",
                    "every candidate from the model as given: one Gauss-Newton step (a shared "
