@@ -29,8 +29,8 @@ constexpr double kRefineRunnerUp = 0.25;
 /// explained at least this share: there the screen is a grid over each effect's plausible range,
 /// not a coarse start, and a runner-up it found explaining next to nothing will not explain 75 %
 /// refined. Seen on the 10-minute bench's pair (ei_scale 0.88 + viscous 0.003): viscous friction
-/// refined explained 74 %, and `sigmoid_mobility`, screened at 0.03 %, took 9 runs and 11 s to
-/// come out at 0.04 %.
+/// refined explained 74 %, and `sigmoid_mobility`, screened at 0.04 %, took 9 runs and 11 s to
+/// stay there.
 constexpr double kWindowedRunnerUpFloor = 0.1;
 
 /// Points of each round of the line search inside its bracket, and its rounds.
