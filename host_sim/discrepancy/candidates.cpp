@@ -151,6 +151,16 @@ PeriodicResidual strongest_periodic_residual(const MeasuredRecording& data,
     return best;
 }
 
+bool within_a_step(std::size_t c, const std::vector<double>& a, const std::vector<double>& b) {
+    const std::vector<Candidate>& library = candidate_library();
+    if (c >= library.size()) return false;
+    const std::vector<FittedParameter>& params = library[c].parameters;
+    if (a.size() != params.size() || b.size() != params.size()) return false;
+    for (std::size_t j = 0; j < params.size(); ++j)
+        if (!(std::abs(a[j] - b[j]) <= params[j].step)) return false;
+    return true;
+}
+
 bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler) {
     const std::vector<Candidate>& library = candidate_library();
     if (c >= library.size() || simpler >= library.size()) return false;

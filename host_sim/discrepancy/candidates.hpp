@@ -48,6 +48,11 @@ struct Candidate {
 /// The six effects of the host simulator's library, in EFFECTS.md order.
 const std::vector<Candidate>& candidate_library();
 
+/// Whether candidate `c`'s parameter values `a` and `b` lie within its finite-difference step of
+/// each other, parameter by parameter (a fit started at one lands where one started at the other
+/// would). False when either has the wrong number of values.
+bool within_a_step(std::size_t c, const std::vector<double>& a, const std::vector<double>& b);
+
 /// Nested effects: whether candidate `c` at fitted `values` is close to candidate `simpler`
 /// (ei_profile with its tip and handle factors equal within their finite-difference step, 0.1).
 bool reduces_to(std::size_t c, const std::vector<double>& values, std::size_t simpler);

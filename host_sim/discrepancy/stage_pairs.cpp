@@ -262,14 +262,9 @@ std::string why_not_refitted_alone(const DiscrepancyContext& context, const Effe
                                    const std::vector<EffectSetFit>& screened) {
     if (!context.evaluator.windowed()) return {};
     const std::size_t c = pair.candidates[k];
-    const std::vector<FittedParameter>& params = candidate_library()[c].parameters;
     if (best_single.ok && best_single.candidates == std::vector<std::size_t>{c} &&
-        best_single.values.size() == member_values.size()) {
-        bool near = true;
-        for (std::size_t j = 0; j < params.size(); ++j)
-            near = near && std::abs(member_values[j] - best_single.values[j]) <= params[j].step;
-        if (near) return "within a finite-difference step of the refined single: its fit";
-    }
+        within_a_step(c, member_values, best_single.values))
+        return "within a finite-difference step of the refined single: its fit";
     if (c < screened.size() && screened[c].ok &&
         share_of(context, screened[c]) < kMinSingleShareForPairs)
         return "its screening over its range explained under 10 %: not alone";

@@ -174,6 +174,26 @@ TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
     EXPECT_FALSE(reduces_to(profile, {0.614, 0.944}, scale));
     EXPECT_FALSE(reduces_to(scale, {1.12}, profile));
 }
+
+// A pair's member at its refined single's values, within each parameter's finite-difference
+// step (the library's: 0.002 s/mm for the viscous coefficient, 0.1 for an EI factor), is not
+// refitted alone on windows: the 10-minute pair's viscous friction, 0.00258 in the pair and
+// 0.00209 alone.
+TEST(DiscrepancyPairMembers, WithinAStepIsParameterByParameterOnTheLibrarysSteps) {
+    const auto index = [](const char* name) {
+        for (std::size_t c = 0; c < candidate_library().size(); ++c)
+            if (candidate_library()[c].name == name) return c;
+        return candidate_library().size();
+    };
+    const std::size_t viscous = index("viscoadhesive_friction"), profile = index("ei_profile");
+    EXPECT_TRUE(within_a_step(viscous, {0.00258}, {0.00209}));
+    EXPECT_FALSE(within_a_step(viscous, {0.0045}, {0.002}));
+    EXPECT_TRUE(within_a_step(profile, {0.75, 1.10}, {0.70, 1.15}));
+    EXPECT_FALSE(within_a_step(profile, {0.75, 1.30}, {0.75, 1.15}));  // the handle's 0.15
+    EXPECT_FALSE(within_a_step(profile, {0.75}, {0.75, 1.15}));        // wrong sizes
+    EXPECT_FALSE(within_a_step(candidate_library().size(), {1.0}, {1.0}));
+    EXPECT_FALSE(within_a_step(viscous, {std::nan("")}, {0.002}));
+}
 }  // namespace
 }  // namespace scopekin::discrepancy
 
