@@ -25,6 +25,13 @@ FittedParameter factor(const char* key) {
     return {key, "1", 0.3, 2.0, 1.0, 0.1, {0.5, 0.7, 1.4, 2.0}};
 }
 
+/// The library's index of the candidate `name` (its size when there is none).
+std::size_t library_index(const char* name) {
+    for (std::size_t c = 0; c < candidate_library().size(); ++c)
+        if (candidate_library()[c].name == name) return c;
+    return candidate_library().size();
+}
+
 /// Costs a cost function at every point of the grid, in the grid's order.
 template <class F>
 GridScreen screen(const std::vector<FittedParameter>& params, F cost) {
@@ -151,15 +158,10 @@ TEST(DiscrepancyScreening, TheProfilesDipsAreItsLocalMinimaLowestFirst) {
 // The other way round (nested_start): ei_scale f is ei_profile (f, f), the start from which a
 // refit of ei_profile can only explain more than ei_scale; no other pair of the library nests.
 TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
-    const auto index = [](const char* name) {
-        for (std::size_t c = 0; c < candidate_library().size(); ++c)
-            if (candidate_library()[c].name == name) return c;
-        return candidate_library().size();
-    };
-    const std::size_t profile = index("ei_profile"), scale = index("ei_scale");
+    const std::size_t profile = library_index("ei_profile"), scale = library_index("ei_scale");
     EXPECT_EQ(nested_start(profile, scale, {0.823}), (std::vector<double>{0.823, 0.823}));
     EXPECT_TRUE(nested_start(scale, profile, {0.8, 1.0}).empty());
-    EXPECT_TRUE(nested_start(profile, index("viscoadhesive_friction"), {0.001}).empty());
+    EXPECT_TRUE(nested_start(profile, library_index("viscoadhesive_friction"), {0.001}).empty());
     EXPECT_TRUE(nested_start(profile, scale, {}).empty());
     EXPECT_TRUE(nested_start(profile, candidate_library().size(), {0.9}).empty());
     // And from the richer to the simpler: ei_profile (tip, handle) gives ei_scale at the tip's
@@ -167,7 +169,8 @@ TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
     EXPECT_EQ(nested_projections(profile, scale, {1.28, 1.30}),
               (std::vector<std::vector<double>>{{1.28}, {1.29}}));
     EXPECT_TRUE(nested_projections(scale, profile, {1.3}).empty());
-    EXPECT_TRUE(nested_projections(profile, index("tissue_stiffening"), {1.0, 1.0}).empty());
+    EXPECT_TRUE(
+        nested_projections(profile, library_index("tissue_stiffening"), {1.0, 1.0}).empty());
     EXPECT_TRUE(nested_projections(profile, scale, {1.0}).empty());
     // Close to the simpler: factors within their difference step (0.1).
     EXPECT_TRUE(reduces_to(profile, {0.814, 0.870}, scale));
@@ -180,12 +183,8 @@ TEST(DiscrepancyNestedEffects, EiScaleIsTheStartOfEiProfileWithEqualFactors) {
 // refitted alone on windows: the 10-minute pair's viscous friction, 0.00258 in the pair and
 // 0.00209 alone.
 TEST(DiscrepancyPairMembers, WithinAStepIsParameterByParameterOnTheLibrarysSteps) {
-    const auto index = [](const char* name) {
-        for (std::size_t c = 0; c < candidate_library().size(); ++c)
-            if (candidate_library()[c].name == name) return c;
-        return candidate_library().size();
-    };
-    const std::size_t viscous = index("viscoadhesive_friction"), profile = index("ei_profile");
+    const std::size_t viscous = library_index("viscoadhesive_friction"),
+                      profile = library_index("ei_profile");
     EXPECT_TRUE(within_a_step(viscous, {0.00258}, {0.00209}));
     EXPECT_FALSE(within_a_step(viscous, {0.0045}, {0.002}));
     EXPECT_TRUE(within_a_step(profile, {0.75, 1.10}, {0.70, 1.15}));
