@@ -8,7 +8,8 @@
 // max_friction_increase (0.25), mesenteric_retraction's exponent (1), ei_profile's bending
 // section (none). sigmoid_mobility is linear in A cos(phi) and A sin(phi) for a given frequency
 // and direction; those two are fitted, and the frequency is read off the residual first (its
-// periodic component, 0.05-2 Hz: strongest_periodic_residual). The direction d (polar angle from
+// periodic component, 0.05-2 Hz: strongest_periodic_residual) and then, on a recording fitted on
+// full runs, chosen by the model's response (sigmoid_frequency.hpp). The direction d (polar angle from
 // +z, azimuth from +x) is fitted too; its first value comes from the screening: the load
 // u sin(w t) + v cos(w t) is linear in the vectors u, v (six runs along the axes), and
 // u = A cos(phi) d, v = A sin(phi) d is its best rank-one approximation (SVD).

@@ -26,8 +26,9 @@ BlockRows block_rows(const MeasuredRecording& data, const std::vector<double>& s
     return rows;
 }
 
-Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
-    if (static_cast<std::size_t>(r.size()) != rows.block_of_row.size()) return r;
+Eigen::VectorXd outlier_block_weights(const BlockRows& rows, const Eigen::VectorXd& r) {
+    Eigen::VectorXd weight = Eigen::VectorXd::Ones(r.size());
+    if (static_cast<std::size_t>(r.size()) != rows.block_of_row.size()) return weight;
     std::vector<double> cost(kBlocks, 0.0);
     for (Eigen::Index k = 0; k < r.size(); ++k)
         cost[static_cast<std::size_t>(rows.block_of_row[static_cast<std::size_t>(k)])] +=
@@ -35,7 +36,7 @@ Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
     std::vector<double> present;
     for (std::size_t b = 0; b < cost.size(); ++b)
         if (rows.noise_floor[b] > 0.0) present.push_back(cost[b]);
-    if (present.size() < 3) return r;  // no median to stand out from
+    if (present.size() < 3) return weight;  // no median to stand out from
     std::nth_element(present.begin(),
                      present.begin() + static_cast<std::ptrdiff_t>(present.size() / 2),
                      present.end());
@@ -47,8 +48,13 @@ Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
         if (cost[b] > cap) scale[b] = std::sqrt(cap / cost[b]);
     }
     for (Eigen::Index k = 0; k < r.size(); ++k)
-        r[k] *= scale[static_cast<std::size_t>(rows.block_of_row[static_cast<std::size_t>(k)])];
-    return r;
+        weight[k] = scale[static_cast<std::size_t>(rows.block_of_row[static_cast<std::size_t>(k)])];
+    return weight;
+}
+
+Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
+    const Eigen::VectorXd weight = outlier_block_weights(rows, r);
+    return r.cwiseProduct(weight);
 }
 
 double capped_cost_on_blocks(BlockRows rows, Eigen::VectorXd r, bool (*keep)(int block)) {

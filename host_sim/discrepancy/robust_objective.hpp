@@ -38,6 +38,8 @@ BlockRows block_rows(const MeasuredRecording& data, const std::vector<double>& s
 /// The residual with each block's cost capped (the header's rule). Blocks without rows are
 /// ignored for the median.
 Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r);
+/// The factor cap_outlier_blocks scales each row of `r` by (1 within the cap).
+Eigen::VectorXd outlier_block_weights(const BlockRows& rows, const Eigen::VectorXd& r);
 
 /// The capped cost over the blocks `keep` accepts only: the other blocks' rows (a run over the
 /// kept blocks' windows leaves them unrun, NaN) count nothing and take no part in the median.

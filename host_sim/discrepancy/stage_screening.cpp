@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "host_sim/discrepancy/ranking.hpp"
+#include "host_sim/discrepancy/sigmoid_frequency.hpp"
 #include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
@@ -20,6 +21,10 @@ struct SigmoidFit {
     /// Columns for (A cos phi, A sin phi) along the direction, and zero columns for its angles
     /// (the angles do nothing at zero amplitude): the neutral Jacobian of the four parameters.
     Eigen::MatrixXd jacobian_along_direction;
+    /// The training cost the fitted (a, b, direction) predicts, linearly: |r0 + J_dir (a, b)|^2.
+    double predicted_cost = std::numeric_limits<double>::infinity();
+    /// The six runs' Jacobian on the uncapped training residuals (sigmoid_frequency.hpp's order).
+    Eigen::MatrixXd uncapped_columns;
 };
 
 SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohmann::json& held,
@@ -44,11 +49,17 @@ SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohma
     const std::vector<ModelPrediction> runs =
         context.evaluator.run_all(lists, RunScope::fit_training);
     Eigen::MatrixXd J(r0.size(), 6);
+    const Eigen::VectorXd r0_uncapped = normalised_residuals(
+        context.data, context.baseline, context.sigma, SampleSet::fit_training);
+    out.uncapped_columns.resize(r0_uncapped.size(), 6);
     for (int k = 0; k < 6; ++k) {
-        if (!runs[static_cast<std::size_t>(k)].ok) return out;
+        const ModelPrediction& run = runs[static_cast<std::size_t>(k)];
+        if (!run.ok) return out;
         // Column order: (u_x, v_x, u_y, v_y, u_z, v_z).
-        J.col(k) =
-            (context.residuals(runs[static_cast<std::size_t>(k)], SampleSet::fit_training) - r0) /
+        J.col(k) = (context.residuals(run, SampleSet::fit_training) - r0) / step;
+        out.uncapped_columns.col(k) =
+            (normalised_residuals(context.data, run, context.sigma, SampleSet::fit_training) -
+             r0_uncapped) /
             step;
     }
     Eigen::MatrixXd A = J.transpose() * J;
@@ -76,8 +87,78 @@ SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohma
     }
     out.a = std::clamp(out.a, sigmoid->parameters[0].lo, sigmoid->parameters[0].hi);
     out.b = std::clamp(out.b, sigmoid->parameters[1].lo, sigmoid->parameters[1].hi);
+    out.predicted_cost = (r0 + out.a * out.jacobian_along_direction.col(0) +
+                          out.b * out.jacobian_along_direction.col(1))
+                             .squaredNorm();
     out.ok = true;
     return out;
+}
+
+/// Frequencies sigmoid_mobility's six runs are made at in the screening, the periodogram's
+/// included: two more cost 12 runs.
+constexpr std::size_t kSigmoidFrequenciesTried = 3;
+
+/// sigmoid_mobility's frequency from the model's response (sigmoid_frequency.hpp), on a recording
+/// fitted on full runs: the six runs at the periodogram's frequency predict the cost at every
+/// frequency of the band; at the scan's lowest dips more than a quarter lobe from every frequency
+/// tried (up to kSigmoidFrequenciesTried in all) the six runs are made too, and the frequency
+/// whose own runs predict the lowest training cost is kept (`held` and `fit` updated). Returns
+/// what was done, for the report.
+nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& context,
+                                                nlohmann::json& held, const Eigen::VectorXd& r0,
+                                                SigmoidFit& fit) {
+    using Json = nlohmann::ordered_json;
+    const double f0 = held.value("frequency_Hz", 0.0);
+    const std::vector<double> times =
+        residual_row_times(context.data, context.sigma, SampleSet::fit_training);
+    const Eigen::VectorXd r0_uncapped = normalised_residuals(
+        context.data, context.baseline, context.sigma, SampleSet::fit_training);
+    // Weighted as the baseline's blocks are capped: an event block counts at its cap.
+    const Eigen::VectorXd weight = outlier_block_weights(context.training_rows, r0_uncapped);
+    const Eigen::MatrixXd columns = weight.asDiagonal() * fit.uncapped_columns;
+    const FrequencyScan scan = scan_sigmoid_frequency(
+        columns, f0, times, r0_uncapped.cwiseProduct(weight), kPeriodicLow_Hz, kPeriodicHigh_Hz);
+    Json profile_Hz = Json::array(), profile_cost = Json::array(), dips = Json::array();
+    for (std::size_t k = 0; k < scan.profile_Hz.size(); ++k) {
+        profile_Hz.push_back(scan.profile_Hz[k]);
+        profile_cost.push_back(scan.profile_cost[k]);
+    }
+    for (std::size_t k = 0; k < scan.dips_Hz.size() && k < 5; ++k)
+        dips.push_back({{"frequency_Hz", scan.dips_Hz[k]}, {"predicted_cost", scan.dips_cost[k]}});
+    Json tried = Json::array(
+        {{{"frequency_Hz", f0}, {"from", "periodogram"}, {"runs_predict", fit.predicted_cost}}});
+    std::vector<double> tried_Hz{f0};
+    const auto [first, last] = std::minmax_element(times.begin(), times.end());
+    const double quarter_lobe_Hz = times.empty() ? 0.0 : 0.25 / std::max(*last - *first, 1e-3);
+    double kept = f0;
+    for (const double f : scan.dips_Hz) {
+        if (tried_Hz.size() >= kSigmoidFrequenciesTried) break;
+        if (std::any_of(tried_Hz.begin(), tried_Hz.end(),
+                        [&](double t) { return std::abs(t - f) <= quarter_lobe_Hz; }))
+            continue;
+        tried_Hz.push_back(f);
+        nlohmann::json held_there = held;
+        held_there["frequency_Hz"] = f;
+        SigmoidFit there = fit_sigmoid_direction(context, held_there, r0);
+        tried.push_back({{"frequency_Hz", f},
+                         {"from", "scan"},
+                         {"runs_predict", there.ok ? Json(there.predicted_cost) : Json(nullptr)}});
+        if (there.ok && there.predicted_cost < fit.predicted_cost) {
+            held = held_there;
+            fit = std::move(there);
+            kept = f;
+        }
+    }
+    return {{"rule",
+             "the six runs at the periodogram's frequency predict the training cost along the "
+             "band (scan); the six runs are made again at its lowest dips more than a quarter "
+             "lobe from every frequency tried, and the frequency whose own runs predict the "
+             "lowest training cost is kept"},
+            {"periodogram_Hz", f0},
+            {"scan_dips", dips},
+            {"tried", tried},
+            {"kept_Hz", kept},
+            {"scan", {{"frequency_Hz", profile_Hz}, {"predicted_cost", profile_cost}}}};
 }
 
 /// The runs of the screening's shared forward-difference Jacobian: one per parameter of every
@@ -139,6 +220,7 @@ NeutralColumns neutral_columns(const DiscrepancyContext& context, const std::vec
 struct Trials {
     std::vector<nlohmann::json> lists;
     std::vector<std::size_t> of;
+    nlohmann::ordered_json sigmoid_frequency;  ///< choose_sigmoid_frequency's account, if run
 };
 
 Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumns& n,
@@ -163,7 +245,10 @@ Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumn
         }
         if (!ok) continue;
         if (library[c].name == "sigmoid_mobility") {
-            const SigmoidFit sf = fit_sigmoid_direction(context, fits[c].held[0], r0);
+            SigmoidFit sf = fit_sigmoid_direction(context, fits[c].held[0], r0);
+            if (sf.ok && !context.evaluator.windowed())
+                trials.sigmoid_frequency =
+                    choose_sigmoid_frequency(context, fits[c].held[0], r0, sf);
             if (sf.ok) {
                 fits[c].neutral_jacobian = sf.jacobian_along_direction;
                 fits[c].values = {sf.a, sf.b, std::acos(std::clamp(sf.direction.z(), -1.0, 1.0)),
@@ -380,6 +465,8 @@ Screening screen_candidates(const DiscrepancyContext& context) {
         else if (f.failure.empty())
             f.failure = f.prediction.failure;
         report.push_back(screening_json(library[c], step, step_cost, g, from_grid, f.values));
+        if (library[c].name == "sigmoid_mobility" && !steps.sigmoid_frequency.is_null())
+            report.back()["frequency"] = steps.sigmoid_frequency;
         if (windowed)
             report.back()["gauss_newton_step"]["screening_blocks_cost"] =
                 std::isfinite(step_grid_cost) ? Json(step_grid_cost) : Json(nullptr);

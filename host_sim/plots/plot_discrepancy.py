@@ -128,6 +128,14 @@ def profile_panels(report):
             start = c["start_values"][j] if j < len(c.get("start_values", [])) else None
             panels.append((c["effect"], prof["parameter"], prof["values"], prof["lowest_training_cost"],
                            start, fitted.get((c["effect"], prof["parameter"]))))
+    for c in report["screening"]["candidates"] if report.get("screening") else []:
+        frequency = c.get("frequency")
+        if frequency and frequency.get("scan"):
+            # sigmoid_mobility: the training cost its six runs predict along the band; start: the
+            # periodogram's frequency, fitted: the frequency kept.
+            panels.append((c["effect"], "frequency_Hz (predicted from six runs)",
+                           frequency["scan"]["frequency_Hz"], frequency["scan"]["predicted_cost"],
+                           frequency.get("periodogram_Hz"), frequency.get("kept_Hz")))
     return panels
 
 

@@ -16,6 +16,7 @@
 #include "host_sim/discrepancy/candidates.hpp"
 #include "host_sim/discrepancy/fit.hpp"
 #include "host_sim/discrepancy/ranking.hpp"
+#include "host_sim/discrepancy/sigmoid_frequency.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -339,6 +340,124 @@ TEST(DiscrepancySigmoidFrequency, ALineIsFoundAboveAStrongerContinuumOnALongReco
             strongest_f = f;
         }
     EXPECT_NEAR(short_one.frequency_Hz, strongest_f, 1e-9);
+}
+
+/// A deep insertion's residual (36 s, 20 samples/s, three components): the scope's response to a
+/// sigmoid load along d = (0, 0.6, 0.8) at 0.45 Hz, phase 0.7, on a stretch of scope in the
+/// sigmoid that grows and shrinks, g(t) = h(t) M (h: 0 -> 1 -> 0.3, M a fixed coupling of the
+/// axes), under a procedure's misfit: three stick-and-release events (a jump of 3 decaying over
+/// 4 s on the first component, at 6, 17 and 28 s: their power lies at the band's low end, above
+/// the line's), and noise. The Jacobian's six columns g_a sin(w0 t), g_a cos(w0 t) at the
+/// periodogram's wrong frequency f0.
+struct ResponseCase {
+    std::vector<double> times;
+    Eigen::VectorXd r0;
+    Eigen::MatrixXd g;  ///< rows x 3
+    Eigen::MatrixXd columns_at(double f0) const {
+        Eigen::MatrixXd c(g.rows(), 6);
+        for (Eigen::Index i = 0; i < g.rows(); ++i)
+            for (int a = 0; a < 3; ++a) {
+                c(i, 2 * a) =
+                    g(i, a) * std::sin(2.0 * M_PI * f0 * times[static_cast<std::size_t>(i)]);
+                c(i, 2 * a + 1) =
+                    g(i, a) * std::cos(2.0 * M_PI * f0 * times[static_cast<std::size_t>(i)]);
+            }
+        return c;
+    }
+};
+
+double release_misfit(double t) {
+    double m = 0.0;
+    for (const double event_s : {6.0, 17.0, 28.0})
+        if (t >= event_s) m += 3.0 * std::exp(-(t - event_s) / 4.0);
+    return m;
+}
+
+ResponseCase sigmoid_response_under_a_misfit() {
+    std::mt19937 engine(5);
+    std::normal_distribution<double> noise(0.0, 0.05);
+    Eigen::Matrix3d M;
+    M << 1.0, 0.2, 0.1, 0.3, 0.8, -0.2, 0.0, 0.4, 1.2;
+    const Eigen::Vector3d d(0.0, 0.6, 0.8);
+    ResponseCase rc;
+    std::vector<double> r, g;
+    for (int i = 0; i <= 36 * 20; ++i) {
+        const double t = i / 20.0;
+        const double h =
+            t < 18.0 ? std::sin(M_PI * t / 36.0) : 0.3 + 0.7 * std::sin(M_PI * t / 36.0);
+        const Eigen::Vector3d response = h * M * d * std::sin(2.0 * M_PI * 0.45 * t + 0.7);
+        for (int c = 0; c < 3; ++c) {
+            rc.times.push_back(t);
+            r.push_back(-response[c] + (c == 0 ? release_misfit(t) : 0.0) + noise(engine));
+            for (int a = 0; a < 3; ++a)
+                g.push_back(h * M(c, a));
+        }
+    }
+    rc.r0 = Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()));
+    rc.g = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
+        g.data(), static_cast<Eigen::Index>(r.size()), 3);
+    return rc;
+}
+
+// Kay (1993), sec. 13.4: the least-squares frequency of a sinusoid in noise minimises the residual
+// after the amplitudes' linear fit. Here the sinusoid passes through the scope's time-varying
+// response, which the six runs at any one frequency give; the scan recovers the truth from runs
+// at the misfit's low end (0.06 Hz) or a cell beside the line (0.47 Hz), and the cost it predicts
+// there is no more than the misfit's and the noise's (0.05^2 per row).
+TEST(DiscrepancySigmoidFrequency, TheModelsResponseAtOneFrequencyFindsTheLineUnderAMisfit) {
+    const ResponseCase rc = sigmoid_response_under_a_misfit();
+    const double noise_cost = 0.05 * 0.05 * static_cast<double>(rc.r0.size());
+    for (const double f0 : {0.06, 0.47}) {
+        const FrequencyScan scan = scan_sigmoid_frequency(rc.columns_at(f0), f0, rc.times, rc.r0,
+                                                          kPeriodicLow_Hz, kPeriodicHigh_Hz);
+        EXPECT_NEAR(scan.frequency_Hz, 0.45, 0.002) << "from " << f0 << " Hz";
+        // What is left is at most the misfit (a sigmoid response fits little of it) and the noise.
+        double misfit = 0.0;
+        for (std::size_t i = 0; i < rc.times.size(); i += 3)
+            misfit += std::pow(release_misfit(rc.times[i]), 2);
+        EXPECT_LT(scan.predicted_cost, misfit + 1.05 * noise_cost) << "from " << f0 << " Hz";
+        EXPECT_LT(scan.predicted_cost, scan.cost_at_start);
+        EXPECT_NEAR(
+            predicted_sigmoid_cost(rc.columns_at(f0), f0, rc.times, rc.r0, scan.frequency_Hz),
+            scan.predicted_cost, 1e-9 * scan.predicted_cost);
+        EXPECT_EQ(scan.profile_Hz.size(), scan.profile_cost.size());
+        ASSERT_FALSE(scan.dips_Hz.empty());
+        EXPECT_EQ(scan.dips_Hz[0], scan.frequency_Hz);
+        for (std::size_t k = 1; k < scan.dips_Hz.size(); ++k) {
+            EXPECT_GE(scan.dips_cost[k], scan.dips_cost[k - 1]);
+            EXPECT_GT(std::abs(scan.dips_Hz[k] - scan.dips_Hz[0]), 1.0 / 36.0);
+        }
+    }
+}
+
+TEST(DiscrepancySigmoidFrequency, BadInputsLeaveTheStartingFrequency) {
+    const ResponseCase rc = sigmoid_response_under_a_misfit();
+    const Eigen::MatrixXd columns = rc.columns_at(0.47);
+    const FrequencyScan wrong_columns =
+        scan_sigmoid_frequency(columns.leftCols(4), 0.47, rc.times, rc.r0, 0.05, 2.0);
+    EXPECT_EQ(wrong_columns.frequency_Hz, 0.47);
+    EXPECT_EQ(wrong_columns.predicted_cost, rc.r0.squaredNorm());
+    EXPECT_TRUE(wrong_columns.dips_Hz.empty());
+    std::vector<double> short_times(rc.times.begin(), rc.times.end() - 1);
+    EXPECT_EQ(scan_sigmoid_frequency(columns, 0.47, short_times, rc.r0, 0.05, 2.0).frequency_Hz,
+              0.47);
+    Eigen::VectorXd with_nan = rc.r0;
+    with_nan[7] = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(scan_sigmoid_frequency(columns, 0.47, rc.times, with_nan, 0.05, 2.0).frequency_Hz,
+              0.47);
+    EXPECT_EQ(scan_sigmoid_frequency(columns, 0.47, rc.times, rc.r0, 2.0, 0.05).frequency_Hz, 0.47);
+}
+
+TEST(DiscrepancySigmoidFrequency, RowTimesFollowTheResidualsRows) {
+    const auto [data, zero] = continuum_and_line(40.0);
+    const std::vector<double> sigma{1.0};
+    const std::vector<double> times = residual_row_times(data, sigma, SampleSet::all);
+    ASSERT_EQ(times.size(), static_cast<std::size_t>(
+                                normalised_residuals(data, zero, sigma, SampleSet::all).size()));
+    ASSERT_EQ(times.size(), 3 * data.outputs[0].time_s.size());
+    for (std::size_t i = 0; i < times.size(); ++i)
+        EXPECT_EQ(times[i], data.outputs[0].time_s[i / 3]);
+    EXPECT_TRUE(residual_row_times(data, {0.0}, SampleSet::all).empty());  // not assessed
 }
 
 }  // namespace
