@@ -27,11 +27,16 @@ struct SigmoidFit {
     Eigen::MatrixXd uncapped_columns;
 };
 
+/// The library's sigmoid_mobility (null if the library had none).
+const Candidate* sigmoid_candidate() {
+    for (const Candidate& c : candidate_library())
+        if (c.name == "sigmoid_mobility") return &c;
+    return nullptr;
+}
+
 SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohmann::json& held,
                                  const Eigen::VectorXd& r0) {
-    const Candidate* sigmoid = nullptr;
-    for (const Candidate& c : candidate_library())
-        if (c.name == "sigmoid_mobility") sigmoid = &c;
+    const Candidate* sigmoid = sigmoid_candidate();
     SigmoidFit out;
     if (sigmoid == nullptr) return out;
     const double step = sigmoid->parameters[0].step;
@@ -152,9 +157,7 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
         fits.push_back(fit_sigmoid_direction(context, helds.back(), r0));
     }
     // Each one's fit run on the training data; the lowest training cost is kept.
-    const Candidate* sigmoid = nullptr;
-    for (const Candidate& c : candidate_library())
-        if (c.name == "sigmoid_mobility") sigmoid = &c;
+    const Candidate* sigmoid = sigmoid_candidate();
     std::vector<nlohmann::json> trial_lists;
     std::vector<std::size_t> trial_of;
     for (std::size_t k = 0; k < fits.size(); ++k)
