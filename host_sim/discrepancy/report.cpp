@@ -134,8 +134,11 @@ Json effect_parameters(const EffectSetFit& fit, std::size_t k) {
              {"sd", nullptr},
              {"fitted", false},
              {"how",
-              "read off the residual's periodogram (0.05-2 Hz, 0.01 Hz grid: the strongest power, "
-              "or on a recording of 100 s or more the most prominent line)"}});
+              "screened, not fitted: the residual's periodogram (0.05-2 Hz, 0.01 Hz grid: the "
+              "strongest power, or on a recording of 100 s or more the most prominent line); on a "
+              "recording fitted on full runs, the frequency of the lowest training cost among it "
+              "and the dips of the model's response scan (report.json screening, "
+              "sigmoid_mobility, frequency)"}});
         const double polar = fit.values[at + 2], azimuth = fit.values[at + 3];
         params.push_back({{"name", "direction"},
                           {"value",

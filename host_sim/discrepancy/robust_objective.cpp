@@ -57,6 +57,16 @@ Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r) {
     return r.cwiseProduct(weight);
 }
 
+Eigen::VectorXd response_event_weights(const BlockRows& rows, const Eigen::MatrixXd& changes) {
+    Eigen::VectorXd weight = Eigen::VectorXd::Ones(changes.rows());
+    for (Eigen::Index k = 0; k < changes.cols(); ++k) {
+        const Eigen::VectorXd capped = outlier_block_weights(rows, changes.col(k));
+        for (Eigen::Index i = 0; i < weight.size(); ++i)
+            if (capped[i] < 1.0) weight[i] = 0.0;
+    }
+    return weight;
+}
+
 double capped_cost_on_blocks(BlockRows rows, Eigen::VectorXd r, bool (*keep)(int block)) {
     if (static_cast<std::size_t>(r.size()) != rows.block_of_row.size()) return r.squaredNorm();
     for (int b = 0; b < kBlocks; ++b)

@@ -41,6 +41,12 @@ Eigen::VectorXd cap_outlier_blocks(const BlockRows& rows, Eigen::VectorXd r);
 /// The factor cap_outlier_blocks scales each row of `r` by (1 within the cap).
 Eigen::VectorXd outlier_block_weights(const BlockRows& rows, const Eigen::VectorXd& r);
 
+/// 0 on the rows of every block where one of `changes`' columns (each a run's change of the
+/// normalised residual from a common reference) stands out as cap_outlier_blocks would cap it,
+/// 1 elsewhere: the blocks where a small change of the model moved an event in time, so the
+/// change there is not proportional to the model's change (a linear fit leaves them out).
+Eigen::VectorXd response_event_weights(const BlockRows& rows, const Eigen::MatrixXd& changes);
+
 /// The capped cost over the blocks `keep` accepts only: the other blocks' rows (a run over the
 /// kept blocks' windows leaves them unrun, NaN) count nothing and take no part in the median.
 double capped_cost_on_blocks(BlockRows rows, Eigen::VectorXd r, bool (*keep)(int block));

@@ -7,6 +7,7 @@
 // residuals are made by hand with a known minimum or line; no model runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -16,6 +17,7 @@
 #include "host_sim/discrepancy/candidates.hpp"
 #include "host_sim/discrepancy/fit.hpp"
 #include "host_sim/discrepancy/ranking.hpp"
+#include "host_sim/discrepancy/robust_objective.hpp"
 #include "host_sim/discrepancy/sigmoid_frequency.hpp"
 
 namespace scopekin::discrepancy {
@@ -428,6 +430,42 @@ TEST(DiscrepancySigmoidFrequency, TheModelsResponseAtOneFrequencyFindsTheLineUnd
             EXPECT_GT(std::abs(scan.dips_Hz[k] - scan.dips_Hz[0]), 1.0 / 36.0);
         }
     }
+}
+
+// A unit load that moves a stick-and-release in time changes one block by far more than the load
+// explains (on the sweep's deep insertion, 5.3 N of handle force for 0.001 N/mm where the rest
+// moved 0.1 N). Such a block dominates a column scaled from it: response_event_weights leaves out
+// exactly that block's rows, and the scan then finds the line as it does without the event.
+TEST(DiscrepancySigmoidFrequency, BlocksWhereAUnitLoadMovedAnEventAreLeftOut) {
+    const ResponseCase rc = sigmoid_response_under_a_misfit();
+    BlockRows rows;  // ten blocks of 3.6 s, as the workflow cuts 36 s
+    rows.noise_floor.assign(kBlocks, 0.1);
+    for (const double t : rc.times)
+        rows.block_of_row.push_back(std::min(static_cast<int>(t / 3.6), kBlocks - 1));
+    const double f0 = 0.06, step = 0.002;
+    // The model as given releases its stick in block 5 where the recording does not (3 units on
+    // the first component), and the y cosine run releases it at the recording's time: its change
+    // there is the event's, 1,500 times what its load explains elsewhere.
+    Eigen::MatrixXd columns = rc.columns_at(f0);
+    Eigen::VectorXd r0 = rc.r0;
+    for (Eigen::Index i = 0; i < columns.rows(); ++i)
+        if (rows.block_of_row[static_cast<std::size_t>(i)] == 5 && i % 3 == 0) {
+            r0[i] += 3.0;
+            columns(i, 3) -= 3.0 / step;
+        }
+    const Eigen::VectorXd weight = response_event_weights(rows, columns * step);
+    ASSERT_EQ(weight.size(), columns.rows());
+    for (Eigen::Index i = 0; i < weight.size(); ++i)
+        EXPECT_EQ(weight[i], rows.block_of_row[static_cast<std::size_t>(i)] == 5 ? 0.0 : 1.0);
+    const FrequencyScan blind =
+        scan_sigmoid_frequency(columns, f0, rc.times, r0, kPeriodicLow_Hz, kPeriodicHigh_Hz);
+    EXPECT_GT(std::abs(blind.frequency_Hz - 0.45), 0.002);  // the premise: the event misleads
+    const FrequencyScan weighted =
+        scan_sigmoid_frequency(weight.asDiagonal() * columns, f0, rc.times, r0.cwiseProduct(weight),
+                               kPeriodicLow_Hz, kPeriodicHigh_Hz);
+    EXPECT_NEAR(weighted.frequency_Hz, 0.45, 0.002);
+    // Changes within every block's cap leave every row in.
+    EXPECT_EQ(response_event_weights(rows, rc.columns_at(f0) * step).minCoeff(), 1.0);
 }
 
 TEST(DiscrepancySigmoidFrequency, BadInputsLeaveTheStartingFrequency) {
