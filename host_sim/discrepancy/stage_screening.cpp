@@ -153,6 +153,12 @@ struct SigmoidTries {
         fits.push_back(std::move(fit));
         training_cost.push_back(std::numeric_limits<double>::infinity());
     }
+    /// add() with the six unit-load runs of `step` N/mm made at `f` (fit_sigmoid_direction).
+    void add_fitted(const DiscrepancyContext& context, double f, const char* origin,
+                    const nlohmann::json& held, const Eigen::VectorXd& r0, double step = 0.0) {
+        add(f, origin, held, SigmoidFit{});
+        fits.back() = fit_sigmoid_direction(context, helds.back(), r0, step);
+    }
     bool near_a_tried(double f, double tolerance_Hz) const {
         return std::any_of(frequency_Hz.begin(), frequency_Hz.end(),
                            [&](double t) { return std::abs(t - f) <= tolerance_Hz; });
@@ -234,8 +240,7 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
     for (const double f : scan.dips_Hz) {
         if (tries.fits.size() >= kSigmoidFrequenciesTried) break;
         if (tries.near_a_tried(f, tenth_lobe_Hz)) continue;
-        tries.add(f, "scan", held, SigmoidFit{});
-        tries.fits.back() = fit_sigmoid_direction(context, tries.helds.back(), r0);
+        tries.add_fitted(context, f, "scan", held, r0);
     }
     run_sigmoid_tries(context, tries);
 
@@ -252,8 +257,8 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
             const FrequencyScan again = scan_from(context, larger, f, times);
             tries.add(f, "larger loads", tries.helds[kept], std::move(larger));
             if (!again.dips_Hz.empty() && std::abs(again.dips_Hz[0] - f) > tenth_lobe_Hz) {
-                tries.add(again.dips_Hz[0], "larger loads' scan", tries.helds[kept], SigmoidFit{});
-                tries.fits.back() = fit_sigmoid_direction(context, tries.helds.back(), r0, load);
+                tries.add_fitted(context, again.dips_Hz[0], "larger loads' scan", tries.helds[kept],
+                                 r0, load);
             }
             run_sigmoid_tries(context, tries);
         }
