@@ -6,29 +6,33 @@
 
 #include "host_sim/discrepancy/ranking.hpp"
 #include "host_sim/discrepancy/sigmoid_frequency.hpp"
+#include "host_sim/discrepancy/sigmoid_load.hpp"
 #include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
 
-/// sigmoid_mobility's direction: the load u sin(w t) + v cos(w t) is linear in (u, v); six runs
-/// (unit load along x, y, z, sine and cosine) give its Jacobian, least squares the 6-vector, and
-/// the SVD of [u v] the best single direction d with u = a d, v = b d.
+/// The six unit-load runs at one frequency and the two loads fitted from them: one without the
+/// blocks where a unit load moved an event (row_weight), one from every block. Neither is always
+/// the better: on the sweep's deep insertion with 0.008 N/mm at 0.45 Hz the event blocks misled
+/// the fit (with them, the scan from 0.06 Hz found 0.272 Hz; without, 0.428 Hz), with 0.004 N/mm
+/// at 0.35 Hz only they held the line (without them the scan was flat and 0.336 Hz was kept,
+/// 0.43 cycle off over 36 s). Each is run, and the lower training cost kept (run_sigmoid_tries).
 struct SigmoidFit {
     bool ok = false;
-    Eigen::Vector3d direction = Eigen::Vector3d::UnitY();
-    double a = 0, b = 0;
-    /// Columns for (A cos phi, A sin phi) along the direction, and zero columns for its angles
-    /// (the angles do nothing at zero amplitude): the neutral Jacobian of the four parameters.
-    Eigen::MatrixXd jacobian_along_direction;
-    /// The training cost the fitted (a, b, direction) predicts, linearly: |r0 + J_dir (a, b)|^2.
-    double predicted_cost = std::numeric_limits<double>::infinity();
+    SigmoidLoad without_event_blocks;
+    SigmoidLoad all_blocks;
+    bool all_blocks_kept = false;  ///< set when the all-blocks load ran at the lower cost
     /// The six runs' Jacobian on the uncapped training residuals (sigmoid_frequency.hpp's order).
     Eigen::MatrixXd uncapped_columns;
     /// 0 on the rows of a training block where a unit-load run changed the outputs by an event
-    /// (response_event_weights), 1 elsewhere: the least squares, and the scan, use the rest.
+    /// (response_event_weights), 1 elsewhere.
     Eigen::VectorXd row_weight;
     double step = 0.0;  ///< the unit loads' amplitude [N/mm]
+
+    const SigmoidLoad& load() const {
+        return all_blocks_kept && all_blocks.ok ? all_blocks : without_event_blocks;
+    }
 };
 
 /// The library's sigmoid_mobility (null if the library had none).
@@ -38,14 +42,14 @@ const Candidate* sigmoid_candidate() {
     return nullptr;
 }
 
-/// The six unit-load runs at `step` N/mm (0: the candidate's own step) and the least-squares load
-/// they give. A block where one of the runs changed the outputs by far more than in the others (a
-/// stick-and-release the load moved in time) is left out of the least squares: there the change
-/// is not proportional to the load, and a column scaled from it would dominate the fit. On the
-/// sweep's deep insertion with 0.008 N/mm at 0.45 Hz, two of seven training blocks were such
-/// blocks in every column; with them left out the fit at the true frequency removed 78 % of the
-/// rest of the misfit (unit loads of 0.006 N/mm) where with them it removed 42 % (a replica in
-/// Python on the world's noiseless outputs).
+/// The six unit-load runs at `step` N/mm (0: the candidate's own step) and the two loads they
+/// give (SigmoidFit). A block where one of the runs changed the outputs by far more than in the
+/// others (a stick-and-release the load moved in time) is not proportional to the load there,
+/// and a column scaled from it can dominate the fit. On the sweep's deep insertion with
+/// 0.008 N/mm at 0.45 Hz, two of seven training blocks were such blocks in every column; with
+/// them left out the fit at the true frequency removed 78 % of the rest of the misfit (unit loads
+/// of 0.006 N/mm) where with them it removed 42 % (a replica in Python on the world's noiseless
+/// outputs). With 0.004 N/mm at 0.35 Hz the fit with them was the right one.
 SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohmann::json& held,
                                  const Eigen::VectorXd& r0, double step = 0.0) {
     const Candidate* sigmoid = sigmoid_candidate();
@@ -82,38 +86,10 @@ SigmoidFit fit_sigmoid_direction(const DiscrepancyContext& context, const nlohma
     }
     out.row_weight = response_event_weights(context.training_rows, out.uncapped_columns * step);
     if (out.row_weight.size() != r0.size()) out.row_weight = Eigen::VectorXd::Ones(r0.size());
-    const Eigen::MatrixXd Jw = out.row_weight.asDiagonal() * J;
-    const Eigen::VectorXd r0w = r0.cwiseProduct(out.row_weight);
-    Eigen::MatrixXd A = Jw.transpose() * Jw;
-    for (Eigen::Index k = 0; k < 6; ++k)
-        A(k, k) += 1e-9 + 1e-6 * A(k, k);
-    const Eigen::VectorXd w = A.ldlt().solve(-Jw.transpose() * r0w);
-    Eigen::Matrix<double, 3, 2> M;
-    for (int axis = 0; axis < 3; ++axis) {
-        M(axis, 0) = w[2 * axis];
-        M(axis, 1) = w[2 * axis + 1];
-    }
-    Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    if (!(svd.singularValues()[0] > 0.0)) return out;
-    out.direction = svd.matrixU().col(0);
-    Eigen::Index k = 0;
-    out.direction.cwiseAbs().maxCoeff(&k);
-    const double sign = out.direction[k] < 0.0 ? -1.0 : 1.0;
-    out.direction *= sign;
-    out.a = sign * svd.singularValues()[0] * svd.matrixV()(0, 0);
-    out.b = sign * svd.singularValues()[0] * svd.matrixV()(1, 0);
-    out.jacobian_along_direction = Eigen::MatrixXd::Zero(r0.size(), 4);
-    for (int axis = 0; axis < 3; ++axis) {
-        out.jacobian_along_direction.col(0) += out.direction[axis] * J.col(2 * axis);
-        out.jacobian_along_direction.col(1) += out.direction[axis] * J.col(2 * axis + 1);
-    }
-    out.a = std::clamp(out.a, sigmoid->parameters[0].lo, sigmoid->parameters[0].hi);
-    out.b = std::clamp(out.b, sigmoid->parameters[1].lo, sigmoid->parameters[1].hi);
-    out.predicted_cost = (r0 + out.a * out.jacobian_along_direction.col(0) +
-                          out.b * out.jacobian_along_direction.col(1))
-                             .cwiseProduct(out.row_weight)
-                             .squaredNorm();
-    out.ok = true;
+    const double lo = sigmoid->parameters[0].lo, hi = sigmoid->parameters[0].hi;
+    out.without_event_blocks = load_along_direction(J, r0, out.row_weight, lo, hi);
+    out.all_blocks = load_along_direction(J, r0, Eigen::VectorXd::Ones(r0.size()), lo, hi);
+    out.ok = out.without_event_blocks.ok;
     return out;
 }
 
@@ -130,10 +106,10 @@ constexpr std::size_t kSigmoidFrequenciesTried = 3;
 /// 0.002 N/mm at 0.45 Hz removed 31 % of the misfit outside the event blocks, from 0.006 N/mm 78 %.
 constexpr double kLargerUnitLoadOverStep = 3.0;
 
-/// sigmoid_mobility's four values from a direction fit: (A cos phi, A sin phi, polar, azimuth).
-std::vector<double> sigmoid_values(const SigmoidFit& sf) {
-    return {sf.a, sf.b, std::acos(std::clamp(sf.direction.z(), -1.0, 1.0)),
-            std::atan2(sf.direction.y(), sf.direction.x())};
+/// sigmoid_mobility's four values from a load: (A cos phi, A sin phi, polar, azimuth).
+std::vector<double> sigmoid_values(const SigmoidLoad& load) {
+    return {load.a, load.b, std::acos(std::clamp(load.direction.z(), -1.0, 1.0)),
+            std::atan2(load.direction.y(), load.direction.x())};
 }
 
 /// The frequencies tried for sigmoid_mobility, each with its direction fit and training cost.
@@ -169,35 +145,48 @@ struct SigmoidTries {
     }
 };
 
-/// Each try not yet run: its fit run on the training data, the capped training cost kept.
+/// Each try not yet run: both its loads run on the training data, the lower capped training
+/// cost kept (SigmoidFit::all_blocks_kept says which).
 void run_sigmoid_tries(const DiscrepancyContext& context, SigmoidTries& tries) {
     const Candidate* sigmoid = sigmoid_candidate();
     std::vector<nlohmann::json> lists;
-    std::vector<std::size_t> of;
-    for (std::size_t k = tries.run; k < tries.fits.size(); ++k)
-        if (tries.fits[k].ok && sigmoid != nullptr) {
-            lists.push_back(nlohmann::json::array(
-                {sigmoid->entry(sigmoid_values(tries.fits[k]), tries.helds[k])}));
-            of.push_back(k);
+    std::vector<std::pair<std::size_t, bool>> of;  // (try, all blocks)
+    for (std::size_t k = tries.run; k < tries.fits.size(); ++k) {
+        const SigmoidFit& fit = tries.fits[k];
+        if (!fit.ok || sigmoid == nullptr) continue;
+        for (const bool all_blocks : {false, true}) {
+            const SigmoidLoad& load = all_blocks ? fit.all_blocks : fit.without_event_blocks;
+            if (!load.ok) continue;
+            lists.push_back(
+                nlohmann::json::array({sigmoid->entry(sigmoid_values(load), tries.helds[k])}));
+            of.emplace_back(k, all_blocks);
         }
+    }
     const std::vector<ModelPrediction> runs =
         context.evaluator.run_all(lists, RunScope::fit_training);
-    for (std::size_t t = 0; t < runs.size(); ++t)
-        if (runs[t].ok)
-            tries.training_cost[of[t]] =
-                context.residuals(runs[t], SampleSet::fit_training).squaredNorm();
+    for (std::size_t t = 0; t < runs.size(); ++t) {
+        if (!runs[t].ok) continue;
+        const auto [k, all_blocks] = of[t];
+        const double cost = context.residuals(runs[t], SampleSet::fit_training).squaredNorm();
+        if (cost < tries.training_cost[k]) {
+            tries.training_cost[k] = cost;
+            tries.fits[k].all_blocks_kept = all_blocks;
+        }
+    }
     tries.run = tries.fits.size();
 }
 
 /// The scan (sigmoid_frequency.hpp) from a fit's six unit-load runs at `f0`: rows weighted as the
-/// model as given's blocks are capped (an event block counts at its cap), and without the blocks
-/// where a unit load moved an event (SigmoidFit::row_weight).
+/// model as given's blocks are capped (an event block counts at its cap), and, if
+/// `without_event_blocks`, without the blocks where a unit load moved an event
+/// (SigmoidFit::row_weight).
 FrequencyScan scan_from(const DiscrepancyContext& context, const SigmoidFit& fit, double f0,
-                        const std::vector<double>& times) {
+                        const std::vector<double>& times, bool without_event_blocks) {
     const Eigen::VectorXd r0_uncapped = normalised_residuals(
         context.data, context.baseline, context.sigma, SampleSet::fit_training);
     Eigen::VectorXd weight = outlier_block_weights(context.training_rows, r0_uncapped);
-    if (fit.row_weight.size() == weight.size()) weight = weight.cwiseProduct(fit.row_weight);
+    if (without_event_blocks && fit.row_weight.size() == weight.size())
+        weight = weight.cwiseProduct(fit.row_weight);
     const Eigen::MatrixXd columns = weight.asDiagonal() * fit.uncapped_columns;
     return scan_sigmoid_frequency(columns, f0, times, r0_uncapped.cwiseProduct(weight),
                                   kPeriodicLow_Hz, kPeriodicHigh_Hz);
@@ -207,8 +196,9 @@ FrequencyScan scan_from(const DiscrepancyContext& context, const SigmoidFit& fit
 /// fitted on full runs: the six runs at the periodogram's frequency predict the cost at every
 /// frequency of the band; at the scan's lowest dips more than a tenth of a lobe (the scan's
 /// grid step: 0.1 cycle over the span) from every frequency tried, up to kSigmoidFrequenciesTried
-/// in all, the six runs are made too; each frequency's fit is then run (training data), and the
-/// one with the lowest training cost is kept. Then the six runs are made again at the kept
+/// in all, and at the lowest such dip of the scan without the event blocks, the six runs are made
+/// too; each frequency's two loads are then run (training data), and the lowest training cost is
+/// kept. Then the six runs are made again at the kept
 /// frequency with larger loads (kLargerUnitLoadOverStep steps, or the kept fit's amplitude if
 /// larger), and at their scan's lowest dip if it is more than a tenth of a lobe away; those fits
 /// are run too, and the lower of them replaces the kept one if it lowers the training cost by
@@ -223,7 +213,8 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
     const double f0 = held.value("frequency_Hz", 0.0);
     const std::vector<double> times =
         residual_row_times(context.data, context.sigma, SampleSet::fit_training);
-    const FrequencyScan scan = scan_from(context, fit, f0, times);
+    const FrequencyScan scan = scan_from(context, fit, f0, times, false);
+    const FrequencyScan scan_without_events = scan_from(context, fit, f0, times, true);
     Json profile_Hz = Json::array(), profile_cost = Json::array(), dips = Json::array();
     for (std::size_t k = 0; k < scan.profile_Hz.size(); ++k) {
         profile_Hz.push_back(scan.profile_Hz[k]);
@@ -231,6 +222,10 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
     }
     for (std::size_t k = 0; k < scan.dips_Hz.size() && k < 5; ++k)
         dips.push_back({{"frequency_Hz", scan.dips_Hz[k]}, {"predicted_cost", scan.dips_cost[k]}});
+    Json dips_without_events = Json::array();
+    for (std::size_t k = 0; k < scan_without_events.dips_Hz.size() && k < 5; ++k)
+        dips_without_events.push_back({{"frequency_Hz", scan_without_events.dips_Hz[k]},
+                                       {"predicted_cost", scan_without_events.dips_cost[k]}});
 
     // The frequencies tried: the periodogram's and the scan's lowest dips apart from it.
     const auto [first, last] = std::minmax_element(times.begin(), times.end());
@@ -242,6 +237,15 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
         if (tries.near_a_tried(f, tenth_lobe_Hz)) continue;
         tries.add_fitted(context, f, "scan", held, r0);
     }
+    // The lowest dip of the scan without the event blocks, if it is not tried already: on the
+    // sweep's deep insertion with 0.008 N/mm at 0.45 Hz the scan with them found 0.272 Hz, without
+    // them 0.428 Hz; with 0.004 N/mm at 0.35 Hz the scan without them was flat and only the one
+    // with them found 0.348 Hz.
+    for (const double f : scan_without_events.dips_Hz) {
+        if (tries.near_a_tried(f, tenth_lobe_Hz)) continue;
+        tries.add_fitted(context, f, "scan without the event blocks", held, r0);
+        break;
+    }
     run_sigmoid_tries(context, tries);
 
     // Larger unit loads at the kept frequency: three steps, or the fitted amplitude if larger.
@@ -249,12 +253,12 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
     const std::size_t larger_from = tries.fits.size();
     const bool kept_ran = tries.fits[kept].ok && std::isfinite(tries.training_cost[kept]);
     const double load = std::max(kLargerUnitLoadOverStep * tries.fits[kept].step,
-                                 std::hypot(tries.fits[kept].a, tries.fits[kept].b));
+                                 std::hypot(tries.fits[kept].load().a, tries.fits[kept].load().b));
     if (kept_ran) {
         const double f = tries.frequency_Hz[kept];
         SigmoidFit larger = fit_sigmoid_direction(context, tries.helds[kept], r0, load);
         if (larger.ok) {
-            const FrequencyScan again = scan_from(context, larger, f, times);
+            const FrequencyScan again = scan_from(context, larger, f, times, true);
             tries.add(f, "larger loads", tries.helds[kept], std::move(larger));
             if (!again.dips_Hz.empty() && std::abs(again.dips_Hz[0] - f) > tenth_lobe_Hz) {
                 tries.add_fitted(context, again.dips_Hz[0], "larger loads' scan", tries.helds[kept],
@@ -278,7 +282,8 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
         tried.push_back({{"frequency_Hz", tries.frequency_Hz[k]},
                          {"from", tries.from[k]},
                          {"unit_load_N_per_mm", t.ok ? Json(t.step) : Json(nullptr)},
-                         {"runs_predict", t.ok ? number(t.predicted_cost) : nullptr},
+                         {"fit", t.all_blocks_kept ? "all blocks" : "without the event blocks"},
+                         {"runs_predict", t.ok ? number(t.load().predicted_cost) : nullptr},
                          {"training_cost", number(tries.training_cost[k])}});
     }
     if (best != 0) {
@@ -287,15 +292,17 @@ nlohmann::ordered_json choose_sigmoid_frequency(const DiscrepancyContext& contex
     }
     return {{"rule",
              "the six unit-load runs at the periodogram's frequency predict the training cost "
-             "along the band (scan, without the blocks where a unit load moved an event); the six "
-             "runs are made again at its lowest dips more than a tenth of a lobe from every "
-             "frequency tried, and each frequency's fit is run on the training data; the six "
+             "along the band (scan); the six runs are made again at its lowest dips more than a "
+             "tenth of a lobe from every frequency tried, and at the lowest such dip of the scan "
+             "without the blocks where a unit load moved an event; each frequency's two fits "
+             "(with and without those blocks) are run on the training data; the six "
              "runs are made again at the best one with three times the unit load (or the fitted "
              "amplitude if larger), and at their scan's lowest dip, kept if they lower the "
              "training cost by more than the noise floor's cost; the lowest training cost is "
              "kept"},
             {"periodogram_Hz", f0},
             {"scan_dips", dips},
+            {"scan_without_event_blocks_dips", dips_without_events},
             {"tried", tried},
             {"kept_Hz", tries.frequency_Hz[best]},
             {"scan", {{"frequency_Hz", profile_Hz}, {"predicted_cost", profile_cost}}}};
@@ -390,8 +397,8 @@ Trials gauss_newton_steps(const DiscrepancyContext& context, const NeutralColumn
                 trials.sigmoid_frequency =
                     choose_sigmoid_frequency(context, fits[c].held[0], r0, sf);
             if (sf.ok) {
-                fits[c].neutral_jacobian = sf.jacobian_along_direction;
-                fits[c].values = sigmoid_values(sf);
+                fits[c].neutral_jacobian = sf.load().jacobian_along_direction;
+                fits[c].values = sigmoid_values(sf.load());
                 trials.lists.push_back(
                     nlohmann::json::array({library[c].entry(fits[c].values, fits[c].held[0])}));
                 trials.of.push_back(c);

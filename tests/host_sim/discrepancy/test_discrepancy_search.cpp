@@ -19,6 +19,7 @@
 #include "host_sim/discrepancy/ranking.hpp"
 #include "host_sim/discrepancy/robust_objective.hpp"
 #include "host_sim/discrepancy/sigmoid_frequency.hpp"
+#include "host_sim/discrepancy/sigmoid_load.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -466,6 +467,55 @@ TEST(DiscrepancySigmoidFrequency, BlocksWhereAUnitLoadMovedAnEventAreLeftOut) {
     EXPECT_NEAR(weighted.frequency_Hz, 0.45, 0.002);
     // Changes within every block's cap leave every row in.
     EXPECT_EQ(response_event_weights(rows, rc.columns_at(f0) * step).minCoeff(), 1.0);
+}
+
+// The load A sin(w t + phi) d is A cos(phi) sin(w t) d + A sin(phi) cos(w t) d: from the six
+// columns at the line's frequency, least squares and the rank-one approximation of [u v] give back
+// d = (0, 0.6, 0.8), a = cos 0.7 and b = sin 0.7 (A = 1) to within the noise, and the cost they
+// predict is the noise's. An event one unit-load run moved (as in the test above) pulls the fit
+// from every block off; the fit without the event block's rows is the fit without the event.
+TEST(DiscrepancySigmoidLoad, TheLoadAndItsDirectionAreRecoveredFromTheSixColumns) {
+    const ResponseCase rc = sigmoid_response_under_a_misfit();
+    const Eigen::MatrixXd columns = rc.columns_at(0.45);
+    Eigen::VectorXd r0 = rc.r0;  // without the procedure's misfit: the line and the noise
+    for (Eigen::Index i = 0; i < r0.size(); i += 3)
+        r0[i] -= release_misfit(rc.times[static_cast<std::size_t>(i)]);
+    const Eigen::VectorXd all_rows = Eigen::VectorXd::Ones(r0.size());
+    const double noise_cost = 0.05 * 0.05 * static_cast<double>(r0.size());
+    auto expect_truth = [](const SigmoidLoad& load, const char* what) {
+        ASSERT_TRUE(load.ok) << what;
+        EXPECT_LT((load.direction - Eigen::Vector3d(0.0, 0.6, 0.8)).norm(), 0.01) << what;
+        EXPECT_NEAR(load.a, std::cos(0.7), 0.01) << what;
+        EXPECT_NEAR(load.b, std::sin(0.7), 0.01) << what;
+    };
+    const SigmoidLoad clean = load_along_direction(columns, r0, all_rows, -2.0, 2.0);
+    expect_truth(clean, "clean");
+    EXPECT_LT(clean.predicted_cost, 1.05 * noise_cost);
+    EXPECT_EQ(clean.jacobian_along_direction.cols(), 4);
+    EXPECT_EQ(clean.jacobian_along_direction.col(2).norm(), 0.0);
+    // The candidate's bounds clamp the amplitudes (cos 0.7 = 0.76).
+    EXPECT_EQ(load_along_direction(columns, r0, all_rows, -0.5, 0.5).a, 0.5);
+
+    BlockRows rows;
+    rows.noise_floor.assign(kBlocks, 0.1);
+    for (const double t : rc.times)
+        rows.block_of_row.push_back(std::min(static_cast<int>(t / 3.6), kBlocks - 1));
+    const double step = 0.002;
+    Eigen::MatrixXd moved = columns;
+    Eigen::VectorXd r0_event = r0;
+    for (Eigen::Index i = 0; i < moved.rows(); ++i)
+        if (rows.block_of_row[static_cast<std::size_t>(i)] == 5 && i % 3 == 0) {
+            r0_event[i] += 3.0;
+            moved(i, 3) -= 3.0 / step;
+        }
+    const SigmoidLoad misled = load_along_direction(moved, r0_event, all_rows, -2.0, 2.0);
+    ASSERT_TRUE(misled.ok);
+    EXPECT_GT((misled.direction - Eigen::Vector3d(0.0, 0.6, 0.8)).norm(), 0.05);  // the premise
+    const Eigen::VectorXd weight = response_event_weights(rows, moved * step);
+    expect_truth(load_along_direction(moved, r0_event, weight, -2.0, 2.0), "event block out");
+    // Mismatched sizes are refused.
+    EXPECT_FALSE(load_along_direction(columns.leftCols(5), r0, all_rows, -2.0, 2.0).ok);
+    EXPECT_FALSE(load_along_direction(columns, r0, all_rows.head(3), -2.0, 2.0).ok);
 }
 
 TEST(DiscrepancySigmoidFrequency, BadInputsLeaveTheStartingFrequency) {
