@@ -433,27 +433,38 @@ TEST(DiscrepancySigmoidFrequency, TheModelsResponseAtOneFrequencyFindsTheLineUnd
     }
 }
 
+/// The response case's rows in ten blocks of 3.6 s, as the workflow cuts 36 s.
+BlockRows ten_blocks(const ResponseCase& rc) {
+    BlockRows rows;
+    rows.noise_floor.assign(kBlocks, 0.1);
+    for (const double t : rc.times)
+        rows.block_of_row.push_back(std::min(static_cast<int>(t / 3.6), kBlocks - 1));
+    return rows;
+}
+
+/// The model as given releases its stick in block 5 where the recording does not (3 units on the
+/// first component), and the y cosine run of `step` N/mm releases it at the recording's time: its
+/// change there is the event's, 1,500 times what its load explains elsewhere.
+void move_an_event_in_block_5(const BlockRows& rows, double step, Eigen::MatrixXd& columns,
+                              Eigen::VectorXd& r0) {
+    for (Eigen::Index i = 0; i < columns.rows(); ++i)
+        if (rows.block_of_row[static_cast<std::size_t>(i)] == 5 && i % 3 == 0) {
+            r0[i] += 3.0;
+            columns(i, 3) -= 3.0 / step;
+        }
+}
+
 // A unit load that moves a stick-and-release in time changes one block by far more than the load
 // explains (on the sweep's deep insertion, 5.3 N of handle force for 0.001 N/mm where the rest
 // moved 0.1 N). Such a block dominates a column scaled from it: response_event_weights leaves out
 // exactly that block's rows, and the scan then finds the line as it does without the event.
 TEST(DiscrepancySigmoidFrequency, BlocksWhereAUnitLoadMovedAnEventAreLeftOut) {
     const ResponseCase rc = sigmoid_response_under_a_misfit();
-    BlockRows rows;  // ten blocks of 3.6 s, as the workflow cuts 36 s
-    rows.noise_floor.assign(kBlocks, 0.1);
-    for (const double t : rc.times)
-        rows.block_of_row.push_back(std::min(static_cast<int>(t / 3.6), kBlocks - 1));
+    const BlockRows rows = ten_blocks(rc);
     const double f0 = 0.06, step = 0.002;
-    // The model as given releases its stick in block 5 where the recording does not (3 units on
-    // the first component), and the y cosine run releases it at the recording's time: its change
-    // there is the event's, 1,500 times what its load explains elsewhere.
     Eigen::MatrixXd columns = rc.columns_at(f0);
     Eigen::VectorXd r0 = rc.r0;
-    for (Eigen::Index i = 0; i < columns.rows(); ++i)
-        if (rows.block_of_row[static_cast<std::size_t>(i)] == 5 && i % 3 == 0) {
-            r0[i] += 3.0;
-            columns(i, 3) -= 3.0 / step;
-        }
+    move_an_event_in_block_5(rows, step, columns, r0);
     const Eigen::VectorXd weight = response_event_weights(rows, columns * step);
     ASSERT_EQ(weight.size(), columns.rows());
     for (Eigen::Index i = 0; i < weight.size(); ++i)
@@ -496,18 +507,11 @@ TEST(DiscrepancySigmoidLoad, TheLoadAndItsDirectionAreRecoveredFromTheSixColumns
     // The candidate's bounds clamp the amplitudes (cos 0.7 = 0.76).
     EXPECT_EQ(load_along_direction(columns, r0, all_rows, -0.5, 0.5).a, 0.5);
 
-    BlockRows rows;
-    rows.noise_floor.assign(kBlocks, 0.1);
-    for (const double t : rc.times)
-        rows.block_of_row.push_back(std::min(static_cast<int>(t / 3.6), kBlocks - 1));
+    const BlockRows rows = ten_blocks(rc);
     const double step = 0.002;
     Eigen::MatrixXd moved = columns;
     Eigen::VectorXd r0_event = r0;
-    for (Eigen::Index i = 0; i < moved.rows(); ++i)
-        if (rows.block_of_row[static_cast<std::size_t>(i)] == 5 && i % 3 == 0) {
-            r0_event[i] += 3.0;
-            moved(i, 3) -= 3.0 / step;
-        }
+    move_an_event_in_block_5(rows, step, moved, r0_event);
     const SigmoidLoad misled = load_along_direction(moved, r0_event, all_rows, -2.0, 2.0);
     ASSERT_TRUE(misled.ok);
     EXPECT_GT((misled.direction - Eigen::Vector3d(0.0, 0.6, 0.8)).norm(), 0.05);  // the premise
