@@ -85,7 +85,14 @@ void ProgressBar::update(double fraction, const std::string& text) {
     draw(std::clamp(fraction + 1e-9, 0.0, 1.0), text, false);
 }
 
-void ProgressBar::draw(double fraction, const std::string& text, bool force) {
+void ProgressBar::stage(double fraction, const std::string& name) {
+    if (quiet_) return;
+    const bool changed = name != last_stage_;
+    last_stage_ = name;
+    draw(std::clamp(fraction + 1e-9, 0.0, 1.0), name, false, changed);
+}
+
+void ProgressBar::draw(double fraction, const std::string& text, bool force, bool new_stage) {
     const int filled = static_cast<int>(std::floor(fraction * 10.0 + 1e-9));
     char line[200];
     std::snprintf(line, sizeof line, "[%s%s] %3d%% %s",
@@ -106,8 +113,8 @@ void ProgressBar::draw(double fraction, const std::string& text, bool force) {
         drawn_ = true;
     } else {
         const int decile = static_cast<int>(std::floor(fraction * 10.0 + 1e-9));
-        if (decile <= last_decile_) return;
-        last_decile_ = decile;
+        if (decile <= last_decile_ && !new_stage) return;
+        last_decile_ = std::max(decile, last_decile_);
         std::cerr << line << "\n" << std::flush;
     }
 }

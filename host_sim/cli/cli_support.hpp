@@ -42,17 +42,20 @@ private:
     std::ofstream out_;
 };
 
-/// Progress on stderr: a single updating bar on a terminal, a line every 10 % otherwise.
+/// Progress on stderr: a single updating bar on a terminal, a line every 10 % otherwise (and, with
+/// `stage`, a line whenever the stage changes: a long stage inside one 10 % step is not hidden).
 class ProgressBar {
 public:
     explicit ProgressBar(bool quiet);
     void update(const model::SimulationProgress& p);
     void update(double fraction, const std::string& text);
+    /// As update, for a named stage: off a terminal, a new stage name is printed at once.
+    void stage(double fraction, const std::string& name);
     /// Ends the bar (a terminal gets the last state drawn and a newline).
     void done();
 
 private:
-    void draw(double fraction, const std::string& text, bool force);
+    void draw(double fraction, const std::string& text, bool force, bool new_stage = false);
     bool quiet_;
     bool tty_;
     bool drawn_ = false;
@@ -60,6 +63,7 @@ private:
     double pending_fraction_ = 0;
     std::string pending_text_;
     int last_decile_ = 0;
+    std::string last_stage_;
     std::chrono::steady_clock::time_point last_draw_{};
 };
 

@@ -200,7 +200,7 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
                            "residuals.png", "candidates.png", "profiles.png"});  // report first
         ProgressBar bar(o.quiet);
         options.progress = [&](const std::string& stage, double fraction) {
-            bar.update(fraction, stage);
+            bar.stage(fraction, stage);
         };
         const discrepancy::WorkflowResult result = discrepancy::run_discrepancy(data, options);
         bar.done();

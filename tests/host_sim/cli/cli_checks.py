@@ -285,8 +285,13 @@ def check_shell_injection():
     expect(ok, f"demo ran nothing from the folder name: {hits}")
     rec = simulate_recording("shell_recording", DISCREPANCY_PROCEDURE)
     hostile2 = "y';touch PWNED4;' $HOME"
-    p = run("discrepancy", rec, "--out", hostile2, "--quiet", cwd=d, expect_status=None)
+    p = run("discrepancy", rec, "--out", hostile2, cwd=d, expect_status=None)
     expect(p.returncode == 0, f"discrepancy into {hostile2!r}: exit {p.returncode}: {p.stderr[-500:]}")
+    # Off a terminal every stage gets a line when it starts, not only when a 10 % step is passed.
+    stage_lines = [line for line in p.stderr.splitlines() if line.startswith("[")]
+    expect(stage_lines[:1] == ["[          ]   0% the model as given"] and
+           stage_lines[-1:] == ["[##########] 100% report"],
+           f"discrepancy's progress names each stage as it starts: {stage_lines}")
     for name in ["outputs.png", "residuals.png", "candidates.png", "report.json"]:
         expect(os.path.isfile(os.path.join(d, hostile2, name)), f"discrepancy wrote {name} into {hostile2!r}")
     ok, hits = no_file_named(d, "PWNED")
