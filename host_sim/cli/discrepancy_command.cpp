@@ -31,6 +31,7 @@ struct DiscrepancyOptions {
     bool quiet = false;
     bool plots = true;
     bool thesis_cantilever = false;
+    bool compare_only = false;
 };
 
 /// The static real-data case (host_sim/discrepancy/README.md): report.json and report.md.
@@ -185,6 +186,7 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
     discrepancy::WorkflowOptions options;
     options.threads = o.threads;
     options.fit_budget_s = o.fit_budget_s;
+    options.compare_only = o.compare_only;
     try {
         if (!o.model.empty()) {
             options.model = model::io::parse_json_file(o.model);
@@ -316,7 +318,8 @@ void add_discrepancy_command(CLI::App& app) {
         "judges them on held-out "
         "blocks (a recording longer than the fit budget on one window per block, the named effects "
         "then over all of "
-        "it). Writes DIR/report.json (verdict named/none/unexplained, effects with fitted "
+        "it). Writes DIR/report.json (verdict named/none/unexplained, or with --compare-only "
+        "none/disagrees; effects with fitted "
         "parameters, units and SDs, "
         "RMS errors before and after), DIR/report.md with plots, DIR/model.json (the model with "
         "the named effects: a "
@@ -361,6 +364,12 @@ void add_discrepancy_command(CLI::App& app) {
         ->default_val(discrepancy::kDefaultFitBudget_s)
         ->check(positive_seconds())
         ->check(CLI::Range(discrepancy::kMinFitBudget_s, 100000.0));
+    cmd->add_flag("--compare-only", options->compare_only,
+                  "Only drive the model and compare it with the recording (one model run): "
+                  "verdict none when every output agrees within its noise, disagrees otherwise; "
+                  "no effect is searched. E.g. a model.json checked against another recording, "
+                  "or whether the true model of a simulated recording explains it")
+        ->excludes("--thesis-cantilever");
     cmd->add_flag(
         "--no-plots", [options](std::int64_t) { options->plots = false; },
         "Write no PNG (the CSV and JSON only)");

@@ -30,6 +30,9 @@ struct WorkflowOptions {
     /// Recording seconds a fit's run simulates at most (fit_windows.hpp); longer recordings are
     /// fitted on windows.
     double fit_budget_s = kDefaultFitBudget_s;
+    /// Only drive the model and compare: verdict none (every output within its noise) or
+    /// disagrees; no effect is searched (`--compare-only`).
+    bool compare_only = false;
     /// Stage text and overall fraction done, now and then.
     std::function<void(const std::string&, double)> progress;
 };

@@ -312,6 +312,7 @@ Json build_report(const DiscrepancyContext& context, const Findings& findings,
     r["recording"] = data.source;
     r["model"] = context.options.model_source;
     r["verdict"] = findings.verdict.verdict;
+    r["compare_only"] = context.options.compare_only;
     r["effects"] = effects_json(context, findings, by_region);
     r["equally_consistent"] = equally_consistent_json(findings);
     r["rmse_before"] = rmse_per_output(data, before, SampleSet::held_out);

@@ -38,7 +38,7 @@ struct Significance {
 };
 
 struct Verdict {
-    std::string verdict = "none";         ///< none, named or unexplained
+    std::string verdict = "none";         ///< none, named, unexplained (or disagrees: compare only)
     std::optional<std::size_t> named;     ///< index into the candidates of the effects named
     nlohmann::ordered_json confirmation;  ///< fitted on windows: the named effects' full run
     /// The other candidates that explain the held-out data as well (equally_consistent).

@@ -26,7 +26,9 @@ WorkflowResult run_discrepancy(const MeasuredRecording& recording, const Workflo
 
     // 3. Held-out blocks (and fit windows) are the context's: every score below is on them.
     // 4. Naming: screening, refinement, pairs, verdict.
-    if (findings.significance.any) {
+    if (findings.significance.any && options.compare_only) {
+        findings.verdict.verdict = "disagrees";
+    } else if (findings.significance.any) {
         stages.start("screening the candidates", 1.0 / kProgressSteps);
         Screening screening = screen_candidates(context);
         const std::vector<EffectSetFit>& screened = screening.fits;

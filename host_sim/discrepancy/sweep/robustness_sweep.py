@@ -9,11 +9,17 @@ output's held-out error at least halved (host_sim/discrepancy/README.md, "The ro
 usage:
   robustness_sweep.py list [--only REGEX]
   robustness_sweep.py run --scopekin BIN --out DIR [--shard I/N] [--jobs J] [--only REGEX] [--rerun]
+  robustness_sweep.py truth --scopekin BIN --out DIR [--shard I/N] [--jobs J] [--only REGEX]
   robustness_sweep.py summarise DIR [--no-plot]
 
 `run` writes DIR/cases/NAME/ (scenario.json, recorded/, discrepancy/, result.json) and skips a case
 whose result.json exists unless --rerun; a case belongs to shard FNV-1a-64(its name) mod N, as in
-`scopekin evaluate`. `summarise` reads every result.json in DIR and writes DIR/sweep.json,
+`scopekin evaluate`. Beside each case `run` (and `truth` alone, without the search: seconds a
+case) measures the truth's own reach, DIR/cases/NAME/truth_reach.json: the recording compared
+(`scopekin discrepancy --compare-only`) with the model as given and with the true model, both driven
+by the recording's encoder; where the true model does not halve the most affected output's held-out
+error no search can pass the case (a recording the encoder's resolution cannot predict, e.g. a
+stick-or-slip branch decided by 0.001 mm). `summarise` reads every result.json in DIR and writes DIR/sweep.json,
 sweep.csv (one row per case), sweep.md (the success rate per effect x size x procedure, the
 failures with their diagnosis) and heatmap.png. Exit status: 0 done, 1 a case could not be run,
 2 bad usage."""
@@ -96,11 +102,58 @@ def select(cases, only, shard):
     return [c for c in chosen if fnv1a64(c["name"]) % count == index]
 
 
+def compare_only(scopekin, recording, model, out):
+    """`scopekin discrepancy --compare-only`'s report.json: the model (None: the default) driven by
+    the recording's encoder and compared with it, one run, no search."""
+    p = subprocess.run([scopekin, "discrepancy", recording, *(["--model", model] if model else []),
+                        "--compare-only", "--out", out, "--no-plots", "--quiet"], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError(f"scopekin discrepancy --compare-only: exit {p.returncode}: {p.stderr.strip()[-500:]}")
+    return json.load(open(os.path.join(out, "report.json")))
+
+
+def truth_reach(scopekin, work):
+    """How far the true model itself gets on the case's recording (WORK/recorded, its scenario in
+    WORK/scenario.json): its held-out RMS error of the output the model as given gets most wrong,
+    against the model as given's, and its verdict (none: it explains the recording to its noise).
+    `meets_bar`: it halves that error (the sweep's own bar), or, on a null recording, the model
+    as given agrees with it. Writes WORK/truth_reach.json and returns it."""
+    recording = os.path.join(work, "recorded", "recording.csv")
+    scenario = json.load(open(os.path.join(work, "scenario.json")))
+    model = {k: v for k, v in scenario.items()
+             if k not in ("description", "procedure", "sensors", "initial_insertion_mm")}
+    model_path = os.path.join(work, "truth_model.json")
+    with open(model_path, "w") as f:
+        json.dump(model, f, indent=1)
+    given = compare_only(scopekin, recording, None, os.path.join(work, "truth_reach", "model_as_given"))
+    true = compare_only(scopekin, recording, model_path, os.path.join(work, "truth_reach", "true_model"))
+    output = given["most_affected_output"]["name"]
+    before, after = given["rmse_before"][output], true["rmse_before"][output]
+    reduction = 1.0 - after / before if before > 0 else 0.0
+    reach = {"model_as_given_verdict": given["verdict"], "true_model_verdict": true["verdict"],
+             "most_affected_output": output, "held_out_rmse_model_as_given": before,
+             "held_out_rmse_true_model": after, "reduction": reduction,
+             "meets_bar": given["verdict"] == "none" if not model.get("truth_effects") else reduction >= procedures.MIN_REDUCTION}
+    with open(os.path.join(work, "truth_reach.json"), "w") as f:
+        json.dump(reach, f, indent=1)
+    return reach
+
+
+def truth_reach_of(scopekin, work):
+    """truth_reach.json if it is there, else measured (the recording must be there)."""
+    path = os.path.join(work, "truth_reach.json")
+    return json.load(open(path)) if os.path.isfile(path) else truth_reach(scopekin, work)
+
+
 def run_case(case, scopekin, out, rerun):
     work = os.path.join(out, "cases", case["name"])
     result_path = os.path.join(work, "result.json")
     if os.path.isfile(result_path) and not rerun:
-        return json.load(open(result_path)), True
+        result = json.load(open(result_path))
+        if result.get("ran") and "truth_reach" not in result:  # a case run before truth_reach was
+            result["truth_reach"] = truth_reach_of(scopekin, work)
+            write_result(result_path, result)
+        return result, True
     sensors = procedures.noise_times(case["noise_factor"]) if case["noise_factor"] != 1 else None
     result = {k: case[k] for k in ("name", "effect", "size", "procedure", "noise_factor", "seed")}
     result["hidden"] = case["effects"]
@@ -123,10 +176,52 @@ def run_case(case, scopekin, out, rerun):
         result["ran"] = True
         result["model_runs"] = report.get("model_runs")
         result.update(procedures.judge(report, case["effects"]))
-    with open(result_path + ".part", "w") as f:
-        json.dump(result, f, indent=1)
-    os.replace(result_path + ".part", result_path)
+        result["truth_reach"] = truth_reach(scopekin, work)
+    write_result(result_path, result)
     return result, False
+
+
+def write_result(path, result):
+    with open(path + ".part", "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(path + ".part", path)
+
+
+def truth_case(case, scopekin, out):
+    """`truth`: the case recorded (unless it is) and the truth's reach measured; no search."""
+    work = os.path.join(out, "cases", case["name"])
+    if not os.path.isfile(os.path.join(work, "recorded", "recording.csv")):
+        sensors = procedures.noise_times(case["noise_factor"]) if case["noise_factor"] != 1 else None
+        procedures.record(scopekin, work, f"robustness sweep {case['name']}", case["procedure"], case["seed"],
+                          case["effects"], sensors)
+    return truth_reach_of(scopekin, work)
+
+
+def cmd_truth(args):
+    cases = select(plan(), args.only, args.shard)
+    if not cases:
+        print("robustness_sweep.py: no case selected", file=sys.stderr)
+        return 2
+    print(f"{len(cases)} case(s): the truth's reach, {args.jobs} at a time", file=sys.stderr)
+    done, failed, start = 0, 0, time.monotonic()
+
+    def one(case):
+        try:
+            return case, truth_case(case, args.scopekin, args.out), None
+        except RuntimeError as e:
+            return case, None, str(e)
+
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for case, reach, error in pool.map(one, cases):
+            done += 1
+            failed += error is not None
+            state = (f"FAILED: {error}" if error else
+                     f"true model {reach['true_model_verdict']}, {reach['most_affected_output']} held-out "
+                     f"{reach['held_out_rmse_model_as_given']:.3g} -> {reach['held_out_rmse_true_model']:.3g} "
+                     f"({'meets' if reach['meets_bar'] else 'MISSES'} the bar)")
+            print(f"[{done}/{len(cases)} {time.monotonic() - start:.0f} s] {case['name']}: {state}", file=sys.stderr,
+                  flush=True)
+    return 1 if failed else 0
 
 
 def cmd_run(args):
@@ -170,6 +265,29 @@ def load_results(out):
     return results
 
 
+def load_truth_reach(out):
+    """Every case's truth_reach.json in DIR/cases (by name), judged or not."""
+    folder = os.path.join(out, "cases")
+    reach = {}
+    for name in sorted(os.listdir(folder)):
+        path = os.path.join(folder, name, "truth_reach.json")
+        if os.path.isfile(path):
+            reach[name] = json.load(open(path))
+    return reach
+
+
+def truth_summary(reach, results):
+    """How many cases the true model itself passes, which it does not, and the success rate over
+    the judged cases it passes."""
+    missed = sorted(n for n, t in reach.items() if not t["meets_bar"])
+    passable = [r for r in results if r["name"] in reach and reach[r["name"]]["meets_bar"]]
+    return {"cases_measured": len(reach), "true_model_meets_bar": len(reach) - len(missed),
+            "missed_by_true_model": [{"case": n, "output": reach[n]["most_affected_output"],
+                                      "reduction": reach[n]["reduction"],
+                                      "true_model_verdict": reach[n]["true_model_verdict"]} for n in missed],
+            "judged_where_true_model_meets_bar": len(passable), "success_rate_where_true_model_meets_bar": rate(passable)}
+
+
 def rate(rows):
     return sum(r["success"] for r in rows) / len(rows) if rows else None
 
@@ -196,6 +314,9 @@ def sd_coverage(results):
 
 def cmd_summarise(args):
     results = load_results(args.out)
+    reach = load_truth_reach(args.out)
+    for r in results:
+        r["true_model_meets_bar"] = reach[r["name"]]["meets_bar"] if r["name"] in reach else None
     planned = {c["name"] for c in plan()}
     cells = {}
     for r in results:
@@ -207,18 +328,20 @@ def cmd_summarise(args):
         "false_named_on_null": sum(1 for r in results if r["effect"] == "null" and r.get("verdict") == "named"),
         "by_effect": {e: rate([r for r in results if r["effect"] == e]) for e in sorted({r["effect"] for r in results})},
         "cells": [{"effect": e, "size": s, "procedure": p, "cases": len(rows), "success_rate": rate(rows),
+                   "true_model_misses": any(r["true_model_meets_bar"] is False for r in rows),
                    "missed": [short_why(r["why"]) for r in rows if not r["success"]]}
                   for (e, s, p), rows in sorted(cells.items())],
         "failures": [{"case": r["name"], "why": r.get("why"),
                       "hidden_listed_as_equal": bool(r.get("hidden_listed_as_equal"))}
                      for r in results if not r["success"]],
         "sd_coverage": sd_coverage(results),
+        "truth_reach": truth_summary(reach, results),
         "planned_cells": sorted({(c["effect"], c["size"], c["procedure"]) for c in plan()}),
     }
     with open(os.path.join(args.out, "sweep.json"), "w") as f:
         json.dump(summary, f, indent=1)
     keys = ["name", "effect", "size", "procedure", "noise_factor", "seed", "success", "verdict", "named",
-            "most_affected_output", "reduction", "why"]
+            "most_affected_output", "reduction", "why", "true_model_meets_bar"]
     with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(keys + ["max_relative_parameter_error", "discrepancy_wall_s"])
@@ -264,9 +387,20 @@ def write_markdown(out, summary, results):
         cells = []
         for p in procs:
             c = by_proc.get(p)
-            cells.append("" if c is None else ("pass" if c["success_rate"] == 1 else "FAIL"))
+            cells.append("" if c is None else ("pass" if c["success_rate"] == 1 else "FAIL") +
+                         (" †" if c and c["true_model_misses"] else ""))
         lines.append(f"| {effect} | {size} | " + " | ".join(cells) + " |")
     lines += ["", "Per effect: " + ", ".join(f"{e} {percent(v)}" for e, v in summary["by_effect"].items()), ""]
+    t = summary["truth_reach"]
+    if t["cases_measured"]:
+        lines += [f"The truth's own reach (†: the true model, driven by the recording's encoder, does not halve the "
+                  f"most affected output's held-out error — no search can pass the case): measured on "
+                  f"{t['cases_measured']} cases, met by the true model on {t['true_model_meets_bar']}; success on "
+                  f"the judged cases it meets: {percent(t['success_rate_where_true_model_meets_bar'])} "
+                  f"({t['judged_where_true_model_meets_bar']} cases).", ""]
+        lines += [f"- `{m['case']}`: the true model's {m['output']} held-out error down {100 * m['reduction']:.0f} % "
+                  f"(verdict {m['true_model_verdict']})" for m in t["missed_by_true_model"]]
+        lines += [""]
     if summary["failures"]:
         listed = sum(1 for f in summary["failures"] if f["hidden_listed_as_equal"])
         lines += [f"Failures (the first criterion missed; in {listed} of {len(summary['failures'])} the report lists the "
@@ -299,6 +433,12 @@ def main():
     run.add_argument("--jobs", type=int, default=1, help="cases at a time (each discrepancy run uses 2 threads)")
     run.add_argument("--only", help="only cases whose name matches this regular expression")
     run.add_argument("--rerun", action="store_true", help="run cases again that already have a result.json")
+    tr = sub.add_parser("truth", help="record the cases (unless recorded) and measure the truth's own reach only")
+    tr.add_argument("--scopekin", required=True, help="the scopekin binary")
+    tr.add_argument("--out", required=True, help="output folder (cases/NAME/ per case)")
+    tr.add_argument("--shard", type=shard_arg, default=(0, 1), help="I/N: this job's shard of N (default 0/1)")
+    tr.add_argument("--jobs", type=int, default=1, help="cases at a time (each run uses one thread)")
+    tr.add_argument("--only", help="only cases whose name matches this regular expression")
     sm = sub.add_parser("summarise", help="combine every result.json in DIR into the sweep's tables and heat map")
     sm.add_argument("out", metavar="DIR")
     sm.add_argument("--no-plot", action="store_true", help="skip heatmap.png")
@@ -307,12 +447,12 @@ def main():
         for c in select(plan(), args.only, (0, 1)):
             print(c["name"], json.dumps(c["effects"]), f"noise x{c['noise_factor']}", f"seed {c['seed']}")
         return 0
-    if args.command == "run":
+    if args.command in ("run", "truth"):
         if args.jobs < 1:
             ap.error("--jobs must be at least 1")
         if not os.access(args.scopekin, os.X_OK):
             ap.error(f"--scopekin {args.scopekin}: not an executable file")
-        return cmd_run(args)
+        return cmd_run(args) if args.command == "run" else cmd_truth(args)
     return cmd_summarise(args)
 
 

@@ -139,6 +139,16 @@ def check_second_pass(work, first, named):
     run("discrepancy", recording, "--model", os.path.join(first, "model.json"), "--out", out, "--no-plots", "--quiet")
     r = json.load(open(os.path.join(out, "report.json")))
     expect(r["verdict"] == "none", f"second pass on model.json: verdict none (got {r['verdict']})")
+    # --compare-only: one model run, no search; the model as given disagrees, the written model
+    # agrees within the noise.
+    for model, verdict in ((None, "disagrees"), (os.path.join(first, "model.json"), "none")):
+        out = os.path.join(work, f"compare_only_{verdict}")
+        run("discrepancy", recording, *(["--model", model] if model else []), "--compare-only", "--out", out,
+            "--no-plots", "--quiet")
+        r = json.load(open(os.path.join(out, "report.json")))
+        expect(r["verdict"] == verdict and r["compare_only"] and r["model_runs"] == 1 and not r["candidates"],
+               f"--compare-only with {model or 'the default model'}: verdict {verdict} from one run, no candidate "
+               f"(got {r['verdict']}, {r['model_runs']} runs, {len(r['candidates'])} candidates)")
     neutral = json.load(open(os.path.join(first, "model.json")))
     neutral["truth_effects"] = [{"name": n, "factor": 1.0} for n in named]
     neutral_path = os.path.join(work, "neutral_model.json")
