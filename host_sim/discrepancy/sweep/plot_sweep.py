@@ -2,6 +2,7 @@
 """The robustness sweep's heat map: one row per effect and size, one column per procedure, each
 cell its success rate (green all judged right, red none), the cell's text "right" or the first
 criterion missed (with the rate when a cell holds several cases). The sweep's planned cells not run yet are grey ("not run").
+A cell marked † holds a case the true model itself cannot pass (the sweep's truth_reach).
 
 usage: plot_sweep.py SWEEP_JSON OUT_PNG   (SWEEP_JSON: robustness_sweep.py summarise's sweep.json)"""
 import json
@@ -31,6 +32,11 @@ def main():
         missed = ", ".join(sorted(set(c.get("missed", []))))
         text[i, j] = ("right" if not missed else missed) if c["cases"] == 1 else \
             f"{100 * c['success_rate']:.0f} % of {c['cases']}" + (f" ({missed})" if missed else "")
+    missed_by_truth = {(m["effect"], m["size"], m["procedure"]) for m in
+                       (summary.get("truth_reach") or {}).get("missed_by_true_model", []) if "effect" in m}
+    for e, s, p in missed_by_truth:
+        i, j = rows.index((e, s)), procs.index(p)
+        text[i, j] += " †"
     fig, ax = plt.subplots(figsize=(4.5 + 1.6 * len(procs), max(3.5, 1.2 + 0.32 * len(rows))))
     cmap = matplotlib.colormaps["RdYlGn"].copy()
     cmap.set_bad("#d0d0d0")
@@ -39,8 +45,9 @@ def main():
         ax.text(j, i, label, ha="center", va="center", fontsize=7)
     ax.set_xticks(range(len(procs)), [f"procedure {p}" for p in procs])
     ax.set_yticks(range(len(rows)), [f"{e} {s}" for e, s in rows], fontsize=7)
-    ax.set_title(f"discrepancy workflow, robustness sweep: {100 * summary['success_rate']:.0f} % of "
-                 f"{summary['cases_judged']} cases right", fontsize=9)
+    rate = "–" if summary["success_rate"] is None else f"{100 * summary['success_rate']:.0f} %"
+    ax.set_title(f"discrepancy workflow, robustness sweep: {rate} of {summary['cases_judged']} cases right"
+                 + ("\n†: the true model itself does not halve the error" if missed_by_truth else ""), fontsize=9)
     fig.tight_layout()
     fig.savefig(sys.argv[2], dpi=110)
     return 0

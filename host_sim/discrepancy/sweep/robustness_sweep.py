@@ -260,8 +260,6 @@ def load_results(out):
         if r.get("ran") and os.path.isfile(report):  # judged again: the rule as it is now
             r.update(procedures.judge(json.load(open(report)), r["hidden"]))
         results.append(r)
-    if not results:
-        raise SystemExit(f"robustness_sweep.py: {folder}: no result.json yet")
     return results
 
 
@@ -276,13 +274,14 @@ def load_truth_reach(out):
     return reach
 
 
-def truth_summary(reach, results):
-    """How many cases the true model itself passes, which it does not, and the success rate over
-    the judged cases it passes."""
+def truth_summary(reach, results, cases):
+    """How many cases the true model itself passes, which it does not (with their cells), and the
+    success rate over the judged cases it passes."""
     missed = sorted(n for n, t in reach.items() if not t["meets_bar"])
     passable = [r for r in results if r["name"] in reach and reach[r["name"]]["meets_bar"]]
     return {"cases_measured": len(reach), "true_model_meets_bar": len(reach) - len(missed),
-            "missed_by_true_model": [{"case": n, "output": reach[n]["most_affected_output"],
+            "missed_by_true_model": [{"case": n, **{k: cases[n][k] for k in ("effect", "size", "procedure") if n in cases},
+                                      "output": reach[n]["most_affected_output"],
                                       "reduction": reach[n]["reduction"],
                                       "true_model_verdict": reach[n]["true_model_verdict"]} for n in missed],
             "judged_where_true_model_meets_bar": len(passable), "success_rate_where_true_model_meets_bar": rate(passable)}
@@ -315,6 +314,8 @@ def sd_coverage(results):
 def cmd_summarise(args):
     results = load_results(args.out)
     reach = load_truth_reach(args.out)
+    if not results and not reach:
+        raise SystemExit(f"robustness_sweep.py: {args.out}/cases: no result.json or truth_reach.json yet")
     for r in results:
         r["true_model_meets_bar"] = reach[r["name"]]["meets_bar"] if r["name"] in reach else None
     planned = {c["name"] for c in plan()}
@@ -335,7 +336,7 @@ def cmd_summarise(args):
                       "hidden_listed_as_equal": bool(r.get("hidden_listed_as_equal"))}
                      for r in results if not r["success"]],
         "sd_coverage": sd_coverage(results),
-        "truth_reach": truth_summary(reach, results),
+        "truth_reach": truth_summary(reach, results, {c["name"]: c for c in plan()}),
         "planned_cells": sorted({(c["effect"], c["size"], c["procedure"]) for c in plan()}),
     }
     with open(os.path.join(args.out, "sweep.json"), "w") as f:

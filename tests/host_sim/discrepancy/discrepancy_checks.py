@@ -262,6 +262,17 @@ def check_sweep(_name):
     expect(s["cases_judged"] == 2 and s["cases_planned"] >= 100, f"2 of {s['cases_planned']} planned cases judged")
     expect(s["success_rate"] == 1.0, f"both judged right: {s['failures']}")
     expect(s["false_named_on_null"] == 0, "no effect named on the null recording")
+    # The truth's own reach: the true ei_scale 1.3 explains its recording (the handle force's error
+    # at least halved), and the null recording's model as given is its true model.
+    reach = {n: json.load(open(os.path.join(out, "cases", n, "truth_reach.json"))) for n in cases}
+    expect(reach["ei_scale-1.3-B"]["meets_bar"] and reach["ei_scale-1.3-B"]["true_model_verdict"] == "none" and
+           reach["ei_scale-1.3-B"]["model_as_given_verdict"] == "disagrees",
+           f"the true ei_scale 1.3 explains its recording, the model as given does not: {reach['ei_scale-1.3-B']}")
+    expect(reach["null-noise2x-B"]["meets_bar"] and reach["null-noise2x-B"]["model_as_given_verdict"] == "none",
+           f"the null recording: the model as given agrees: {reach['null-noise2x-B']}")
+    t = s["truth_reach"]
+    expect(t["cases_measured"] == 2 and t["true_model_meets_bar"] == 2 and t["success_rate_where_true_model_meets_bar"] == 1.0,
+           f"summarised: the true model meets the bar on both, both right: {t}")
     c = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py"),
                         os.path.join(out, "heatmap.png")], capture_output=True, text=True)
     expect(c.returncode == 0, f"the heat map is non-trivial: {c.stdout.strip()} {c.stderr.strip()}")
