@@ -59,15 +59,20 @@ std::vector<double> estimate_noise(const MeasuredRecording& data) {
         // The tip force sensor reads compression only: where it reads 0 the noise is clipped away,
         // so only triples of positive readings count.
         const bool clipped_at_zero = s.id == OutputId::tip_force;
+        // A thinned output's noise from every sample the sensor delivered: over 33 ms the handle
+        // force's own curvature (a scope sticking and slipping) is (33)^2 times what it is over
+        // 1 ms, and the thinned series read its noise 1.7 (slow) to 13 (deep, fast) times too high.
+        const bool full = !s.full_rate.empty();
+        const std::size_t n = full ? s.full_rate.size() : s.value.size();
+        const auto at = [&](std::size_t i, int c) { return full ? s.full_rate[i] : s.value[i][c]; };
         double variance = 0.0;
         bool enough = true;
         for (int c = 0; c < s.components; ++c) {
             std::vector<double> d2;
-            for (std::size_t i = 1; i + 1 < s.value.size(); ++i) {
-                if (clipped_at_zero &&
-                    !(s.value[i - 1][c] > 0.0 && s.value[i][c] > 0.0 && s.value[i + 1][c] > 0.0))
+            for (std::size_t i = 1; i + 1 < n; ++i) {
+                if (clipped_at_zero && !(at(i - 1, c) > 0.0 && at(i, c) > 0.0 && at(i + 1, c) > 0.0))
                     continue;
-                d2.push_back(std::abs(s.value[i + 1][c] - 2.0 * s.value[i][c] + s.value[i - 1][c]));
+                d2.push_back(std::abs(at(i + 1, c) - 2.0 * at(i, c) + at(i - 1, c)));
             }
             if (d2.size() < kMinNoiseSamples) enough = false;
             // 1.4826 x median absolute value: the SD of a normal variable; / sqrt(6): see the header.

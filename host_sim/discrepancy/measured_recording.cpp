@@ -158,6 +158,10 @@ std::array<MeasuredSeries, kOutputCount> extract_outputs(const recording::Record
             series[static_cast<std::size_t>(OutputId::tip_force)].value.emplace_back(f, 0.0, 0.0);
         }
         if (row.handle) {
+            series[static_cast<std::size_t>(OutputId::handle_force)].full_rate.push_back(
+                row.handle->force_N);
+            series[static_cast<std::size_t>(OutputId::handle_torque)].full_rate.push_back(
+                row.handle->torque_Nmm);
             if (std::abs(row.handle->force_N) > 200.0)
                 throw DiscrepancyInputError(where + "handle force " + number(row.handle->force_N) +
                                             " at t = " + number(t) +

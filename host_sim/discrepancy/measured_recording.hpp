@@ -48,6 +48,9 @@ struct MeasuredSeries {
     int components = 3;
     std::vector<double> time_s;
     std::vector<Eigen::Vector3d> value;
+    /// A scalar output thinned from a faster sensor (the handle's 1 kHz to every 33 ms): every
+    /// sample it delivered, from which its noise is estimated (estimate_noise); else empty.
+    std::vector<double> full_rate;
 };
 
 /// Any recording's drive and measured outputs: a bench's, a patient's or one `scopekin simulate`

@@ -121,6 +121,30 @@ TEST(DiscrepancyAnalysis, NoiseEstimateRecoversAKnownSd) {
     EXPECT_FALSE(assessable(sigma, 1));
 }
 
+TEST(DiscrepancyAnalysis, AHandleForceThatChangesFastHasItsNoiseEstimatedAtTheSensorsRate) {
+    // The handle at 1 kHz: a scope sticking and slipping, 10 N at 3 Hz, plus N(0, 0.02 N) per
+    // sample. Over the 33 ms the outputs are compared at, its second difference is
+    // 10 (2 pi 3 0.033)^2 = 3.9 N at the peaks, 200 times the noise; over 1 ms, 0.0036 N.
+    recording::Recording rec = make_recording(30.0, 0.5, 11);
+    std::mt19937 engine(5);
+    std::normal_distribution<double> noise(0.0, 0.02);
+    constexpr double kTwoPi = 6.283185307179586;
+    for (recording::RecordingRow& row : rec.rows) {
+        const double t = static_cast<double>(row.time_us) * 1e-6;
+        row.handle = recording::ForceTorqueCells{20.0 + 10.0 * std::sin(kTwoPi * 3.0 * t) +
+                                                     noise(engine),
+                                                 0.0};
+    }
+    const MeasuredRecording d = extract_measured_recording(rec, "r.csv");
+    std::size_t handle = d.outputs.size();
+    for (std::size_t o = 0; o < d.outputs.size(); ++o)
+        if (d.outputs[o].id == OutputId::handle_force) handle = o;
+    ASSERT_LT(handle, d.outputs.size());
+    // Premise: compared every 33 ms (the EM tracker's rate), not at 1 kHz.
+    ASSERT_NEAR(static_cast<double>(d.outputs[handle].value.size()), 30.0 / 0.033, 2.0);
+    EXPECT_NEAR(estimate_noise(d)[handle], 0.02, 0.1 * 0.02);
+}
+
 TEST(DiscrepancyAnalysis, BlocksPhasesAndResiduals) {
     const MeasuredRecording d = extract_measured_recording(make_recording(20.0, 0.5), "r.csv");
     // 20 s in 10 blocks of ~2 s; blocks 1, 4 and 7 are held out.
