@@ -70,7 +70,8 @@ std::vector<double> estimate_noise(const MeasuredRecording& data) {
         for (int c = 0; c < s.components; ++c) {
             std::vector<double> d2;
             for (std::size_t i = 1; i + 1 < n; ++i) {
-                if (clipped_at_zero && !(at(i - 1, c) > 0.0 && at(i, c) > 0.0 && at(i + 1, c) > 0.0))
+                if (clipped_at_zero &&
+                    !(at(i - 1, c) > 0.0 && at(i, c) > 0.0 && at(i + 1, c) > 0.0))
                     continue;
                 d2.push_back(std::abs(at(i + 1, c) - 2.0 * at(i, c) + at(i - 1, c)));
             }

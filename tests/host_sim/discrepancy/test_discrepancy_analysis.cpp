@@ -131,9 +131,8 @@ TEST(DiscrepancyAnalysis, AHandleForceThatChangesFastHasItsNoiseEstimatedAtTheSe
     constexpr double kTwoPi = 6.283185307179586;
     for (recording::RecordingRow& row : rec.rows) {
         const double t = static_cast<double>(row.time_us) * 1e-6;
-        row.handle = recording::ForceTorqueCells{20.0 + 10.0 * std::sin(kTwoPi * 3.0 * t) +
-                                                     noise(engine),
-                                                 0.0};
+        row.handle = recording::ForceTorqueCells{
+            20.0 + 10.0 * std::sin(kTwoPi * 3.0 * t) + noise(engine), 0.0};
     }
     const MeasuredRecording d = extract_measured_recording(rec, "r.csv");
     std::size_t handle = d.outputs.size();
