@@ -422,24 +422,25 @@ def shard_arg(text):
     return int(m.group(1)), int(m.group(2))
 
 
+def add_case_options(parser, per_job):
+    """The options `run` and `truth` share: the binary, the folder, the shard, the jobs, --only."""
+    parser.add_argument("--scopekin", required=True, help="the scopekin binary")
+    parser.add_argument("--out", required=True, help="output folder (cases/NAME/ per case)")
+    parser.add_argument("--shard", type=shard_arg, default=(0, 1), help="I/N: this job's shard of N (default 0/1)")
+    parser.add_argument("--jobs", type=int, default=1, help=f"cases at a time ({per_job})")
+    parser.add_argument("--only", help="only cases whose name matches this regular expression")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     sub = ap.add_subparsers(dest="command", required=True)
     ls = sub.add_parser("list", help="print the planned cases")
     ls.add_argument("--only", help="only cases whose name matches this regular expression")
     run = sub.add_parser("run", help="record and judge the cases of one shard")
-    run.add_argument("--scopekin", required=True, help="the scopekin binary")
-    run.add_argument("--out", required=True, help="output folder (cases/NAME/ per case)")
-    run.add_argument("--shard", type=shard_arg, default=(0, 1), help="I/N: this job's shard of N (default 0/1)")
-    run.add_argument("--jobs", type=int, default=1, help="cases at a time (each discrepancy run uses 2 threads)")
-    run.add_argument("--only", help="only cases whose name matches this regular expression")
+    add_case_options(run, "each discrepancy run uses 2 threads")
     run.add_argument("--rerun", action="store_true", help="run cases again that already have a result.json")
     tr = sub.add_parser("truth", help="record the cases (unless recorded) and measure the truth's own reach only")
-    tr.add_argument("--scopekin", required=True, help="the scopekin binary")
-    tr.add_argument("--out", required=True, help="output folder (cases/NAME/ per case)")
-    tr.add_argument("--shard", type=shard_arg, default=(0, 1), help="I/N: this job's shard of N (default 0/1)")
-    tr.add_argument("--jobs", type=int, default=1, help="cases at a time (each run uses one thread)")
-    tr.add_argument("--only", help="only cases whose name matches this regular expression")
+    add_case_options(tr, "each run uses one thread")
     sm = sub.add_parser("summarise", help="combine every result.json in DIR into the sweep's tables and heat map")
     sm.add_argument("out", metavar="DIR")
     sm.add_argument("--no-plot", action="store_true", help="skip heatmap.png")
