@@ -276,6 +276,15 @@ def check_sweep(_name):
     c = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "host_sim", "plots", "check_pngs.py"),
                         os.path.join(out, "heatmap.png")], capture_output=True, text=True)
     expect(c.returncode == 0, f"the heat map is non-trivial: {c.stdout.strip()} {c.stderr.strip()}")
+    # The 10-minute bench (too slow for CI: seven 2-minute runs) refuses bad usage with exit 2.
+    bench = os.path.join(SOURCE, "host_sim", "discrepancy", "sweep", "ten_minute_bench.py")
+    for args, fragment in ((["--scopekin", os.path.join(out, "no-such-binary")], "not an executable"),
+                           (["--scopekin", SCOPEKIN, "--only", "no-such-recording"], "no recording selected"),
+                           (["--scopekin", SCOPEKIN, "--only", "("], "--only:")):
+        b = subprocess.run(["/usr/bin/python3", bench, *args, "--out", os.path.join(out, "bench")],
+                           capture_output=True, text=True)
+        expect(b.returncode == 2 and fragment in b.stderr, f"the bench refuses {args}: exit {b.returncode}, "
+               f"'{fragment}' in {b.stderr.strip()[-200:]}")
     hidden = [{"name": "ei_scale", "factor": 0.8}]
 
     def report(value, reduction=0.9, verdict="named"):
