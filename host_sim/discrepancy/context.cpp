@@ -42,6 +42,16 @@ DiscrepancyContext::DiscrepancyContext(const MeasuredRecording& recording,
     training_rows = block_rows(data, sigma, SampleSet::fit_training);
 }
 
+double DiscrepancyContext::training_noise_floor() const {
+    double floor = 0.0;
+    for (std::size_t o = 0; o < data.outputs.size(); ++o)
+        floor += assessable(sigma, o) &&
+                         samples_in_set(data, data.outputs[o], SampleSet::fit_training) > 0
+                     ? 1.0
+                     : 0.0;
+    return floor;
+}
+
 double DiscrepancyContext::screening_cost(const ModelPrediction& p) const {
     return capped_cost_on_blocks(training_rows,
                                  normalised_residuals(data, p, sigma, SampleSet::fit_training),

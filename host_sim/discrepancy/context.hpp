@@ -67,7 +67,9 @@ struct DiscrepancyContext {
         windows;                ///< the fit windows; none: every run covers the whole recording
     std::vector<double> sigma;  ///< noise SD per output (estimate_noise)
     double noise_floor = 0.0;   ///< held-out cost of noise alone: 1 per assessed output
-    BlockRows training_rows;    ///< the fits' training rows' blocks (robust_objective.hpp)
+    /// The training cost of noise alone: 1 per assessed output with training samples.
+    double training_noise_floor() const;
+    BlockRows training_rows;  ///< the fits' training rows' blocks (robust_objective.hpp)
     ModelSpec model;
     Evaluator evaluator;           ///< runs `model` under `data`
     ModelPrediction baseline;      ///< the model as given, whole recording

@@ -33,18 +33,20 @@ bool contains(const EffectSetFit& a, const EffectSetFit& b) {
            !nested_start(a.candidates[0], b.candidates[0], b.values).empty();
 }
 
-/// Whether `simpler` leaves less than kMinRestCost of held-out excess: nothing for more
-/// parameters to explain.
-bool leaves_nothing(const DiscrepancyContext& context, const EffectSetFit& simpler) {
-    return simpler.held_out_cost - context.noise_floor < kMinRestCost;
-}
-
-bool earns(const DiscrepancyContext& context, const EffectSetFit& richer,
-           const EffectSetFit& simpler) {
-    return earns_its_parameters(richer.held_out_cost, simpler.held_out_cost, context.noise_floor);
+NestedCosts costs_of(const EffectSetFit& f) {
+    return {f.held_out_cost, f.training_cost};
 }
 
 }  // namespace
+
+bool richer_yields(NestedCosts richer, NestedCosts simpler, bool fitted_close,
+                   double held_out_floor, double training_floor) {
+    if (earns_its_parameters(richer.held_out, simpler.held_out, held_out_floor)) return false;
+    const bool leaves_nothing =
+        simpler.held_out - held_out_floor < kMinRestCost &&
+        !earns_its_parameters(richer.training, simpler.training, training_floor);
+    return fitted_close || leaves_nothing;
+}
 
 void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits) {
     if (fits.empty() || !fits.front().ok) return;
@@ -53,20 +55,22 @@ void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>
     for (std::size_t k = 1; k < fits.size(); ++k)
         if (fits[k].ok && share_of(context, fits[k]) >= tie && fits[k].bic < fits[lead].bic)
             lead = k;
-    // Of two nested effects within the tie: the richer yields to the simpler unless it earns its
-    // parameters on the held-out data (earns_its_parameters) when it is fitted close to it
-    // (reduces_to) or the simpler leaves nothing to explain, whatever the BIC; the simpler
-    // yields to the richer that earns them.
+    // Of two nested effects within the tie: the richer yields to the simpler (richer_yields)
+    // whatever the BIC; the simpler yields to the richer that earns its parameters.
     for (bool moved = true; moved;) {
         moved = false;
         for (std::size_t k = 0; k < fits.size() && !moved; ++k) {
             if (k == lead || !fits[k].ok || share_of(context, fits[k]) < tie) continue;
             const bool to_simpler =
-                contains(fits[lead], fits[k]) && !earns(context, fits[lead], fits[k]) &&
-                (reduces_to(fits[lead].candidates[0], fits[lead].values, fits[k].candidates[0]) ||
-                 leaves_nothing(context, fits[k]));
+                contains(fits[lead], fits[k]) &&
+                richer_yields(
+                    costs_of(fits[lead]), costs_of(fits[k]),
+                    reduces_to(fits[lead].candidates[0], fits[lead].values, fits[k].candidates[0]),
+                    context.noise_floor, context.training_noise_floor());
             const bool to_richer =
-                contains(fits[k], fits[lead]) && earns(context, fits[k], fits[lead]);
+                contains(fits[k], fits[lead]) &&
+                earns_its_parameters(fits[k].held_out_cost, fits[lead].held_out_cost,
+                                     context.noise_floor);
             if (to_simpler || to_richer) {
                 lead = k;
                 moved = true;

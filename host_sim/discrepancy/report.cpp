@@ -337,6 +337,7 @@ Json build_report(const DiscrepancyContext& context, const Findings& findings,
     r["pair_test"] = findings.pair_test;
     r["baseline"] = {{"held_out_cost", context.cost_before},
                      {"noise_floor_cost", context.noise_floor},
+                     {"training_noise_floor_cost", context.training_noise_floor()},
                      {"bic", bic_of(context, before, 0)}};
     r["location"] = locate(data, before, context.sigma, context.options.significance);
     r["recording_span_s"] = {data.start_s, data.end_s};

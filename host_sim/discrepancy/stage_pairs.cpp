@@ -105,18 +105,6 @@ bool leaves_nothing_significant(const DiscrepancyContext& context, const EffectS
     return true;
 }
 
-/// The training cost of noise alone: 1 per assessed output with training samples.
-double training_noise_floor(const DiscrepancyContext& context) {
-    const MeasuredRecording& data = context.data;
-    double floor_training = 0.0;
-    for (std::size_t o = 0; o < data.outputs.size(); ++o)
-        floor_training += assessable(context.sigma, o) &&
-                                  samples_in_set(data, data.outputs[o], SampleSet::fit_training) > 0
-                              ? 1.0
-                              : 0.0;
-    return floor_training;
-}
-
 /// A pair to fit: its two candidates, their held parameters and the joint start.
 struct PairStart {
     std::vector<std::size_t> set;
@@ -411,7 +399,7 @@ std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
                      });
     const EffectSetFit& best = *singles.front();
     const double cost = context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
-    const double excess = cost - training_noise_floor(context);
+    const double excess = cost - context.training_noise_floor();
     const double screened_gain = partners.empty() || !(excess > 0.0)
                                      ? 0.0
                                      : (cost - partners.front().training_cost) / excess;
@@ -435,7 +423,7 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
     double partner_gain = 0.0;
     std::vector<PartnerScreen> partners;
     if (single_explains && leaves_something) {
-        partner_gain = best_partner_gain(context, best, screened, training_noise_floor(context));
+        partner_gain = best_partner_gain(context, best, screened, context.training_noise_floor());
         out.pair_test = {
             {"why", "the best single effect explains enough but leaves an output significant"},
             {"best_partner_gain", partner_gain},

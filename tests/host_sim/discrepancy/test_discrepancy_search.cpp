@@ -128,6 +128,28 @@ TEST(DiscrepancyNestedEffects, TheRicherFitMustRemoveHalfOfWhatTheSimplerLeaves)
     EXPECT_FALSE(earns_its_parameters(9.0, 8.0, 6.0));   // worse
 }
 
+// The richer of two nested fits yields to the simpler where it earns nothing on the held-out data
+// and is fitted close to it, or the simpler leaves nothing to explain on the held-out and the
+// training blocks. The sweep's hidden distal softening 0.9 on procedure B: ei_scale 0.909
+// (held-out 5.48, training 6.64), ei_profile (0.897, 1.022) (5.31, 5.07), floors 6: nothing to
+// earn on the held-out blocks, but in training the profile removes 1.57 of the 0.64 ei_scale
+// leaves: it keeps the lead. A hidden ei_scale 0.9 there: the profile fitted as (0.900, 0.898),
+// close, yields.
+TEST(DiscrepancyNestedEffects, TheRicherKeepsTheLeadWhereTheTrainingBlocksShowWhatItAdds) {
+    EXPECT_FALSE(richer_yields({5.31, 5.07}, {5.48, 6.64}, false, 6.0, 6.0));
+    EXPECT_TRUE(richer_yields({5.41, 5.12}, {5.42, 5.12}, true, 6.0, 6.0));
+    // Fitted apart, the simpler at its noise in training (0.3 under the floor): nothing to earn.
+    EXPECT_TRUE(richer_yields({5.41, 5.0}, {5.42, 5.7}, false, 6.0, 6.0));
+    // Fitted apart, training removing under half of what the simpler leaves there (0.9 of 2).
+    EXPECT_TRUE(richer_yields({5.41, 7.1}, {5.42, 8.0}, false, 6.0, 6.0));
+    // Earning on the held-out data wins whatever the rest (8.40 -> 6.88 over a floor of 6).
+    EXPECT_FALSE(richer_yields({6.88, 9.0}, {8.40, 9.0}, true, 6.0, 6.0));
+    // The simpler leaves held-out excess (0.6 above the floor) the richer does not earn: it yields
+    // only when fitted close.
+    EXPECT_FALSE(richer_yields({6.5, 5.0}, {6.6, 7.0}, false, 6.0, 6.0));
+    EXPECT_TRUE(richer_yields({6.5, 5.0}, {6.6, 7.0}, true, 6.0, 6.0));
+}
+
 // What the recording cannot tell from the named set: a held-out cost within half a noise variance
 // of the named set's, or both under half a noise variance above the floor. The sweep's numbers: a
 // hidden distal softening 0.9 on procedure C (ei_scale 4.13 named, ei_profile 3.95, floor 5) and
