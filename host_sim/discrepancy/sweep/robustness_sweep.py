@@ -19,12 +19,15 @@ case) measures the truth's own reach, DIR/cases/NAME/truth_reach.json: the recor
 (`scopekin discrepancy --compare-only`) with the model as given and with the true model, both driven
 by the recording's encoder; where the true model does not halve the most affected output's held-out
 error no search can pass the case (a recording the encoder's resolution cannot predict, e.g. a
-stick-or-slip branch decided by 0.001 mm). `summarise` reads every result.json in DIR and writes DIR/sweep.json,
+stick-or-slip branch decided by 0.001 mm). Each result.json records the SHA-256 of the binary that
+judged it; `summarise` lists them, so a count is known to be one code's. `summarise` reads every
+result.json in DIR and writes DIR/sweep.json,
 sweep.csv (one row per case), sweep.md (the success rate per effect x size x procedure, the
 failures with their diagnosis) and heatmap.png. Exit status: 0 done, 1 a case could not be run,
 2 bad usage."""
 import argparse
 import csv
+import hashlib
 import json
 import os
 import re
@@ -145,6 +148,12 @@ def truth_reach_of(scopekin, work):
     return json.load(open(path)) if os.path.isfile(path) else truth_reach(scopekin, work)
 
 
+def binary_digest(path):
+    """The first 12 hex digits of the binary's SHA-256: results with the same digest are one code's."""
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()[:12]
+
+
 def run_case(case, scopekin, out, rerun):
     work = os.path.join(out, "cases", case["name"])
     result_path = os.path.join(work, "result.json")
@@ -157,6 +166,7 @@ def run_case(case, scopekin, out, rerun):
     sensors = procedures.noise_times(case["noise_factor"]) if case["noise_factor"] != 1 else None
     result = {k: case[k] for k in ("name", "effect", "size", "procedure", "noise_factor", "seed")}
     result["hidden"] = case["effects"]
+    result["scopekin_sha256"] = binary_digest(scopekin)
     t0 = time.monotonic()
     try:
         recording = procedures.record(scopekin, work, f"robustness sweep {case['name']}", case["procedure"],
@@ -336,6 +346,9 @@ def cmd_summarise(args):
                       "hidden_listed_as_equal": bool(r.get("hidden_listed_as_equal"))}
                      for r in results if not r["success"]],
         "sd_coverage": sd_coverage(results),
+        # Which binaries judged the cases (a count is one code's only with one digest).
+        "binaries": {d: sum(1 for r in results if r.get("scopekin_sha256", "not recorded") == d)
+                     for d in sorted({r.get("scopekin_sha256", "not recorded") for r in results})},
         "truth_reach": truth_summary(reach, results, {c["name"]: c for c in plan()}),
         "planned_cells": sorted({(c["effect"], c["size"], c["procedure"]) for c in plan()}),
     }
@@ -379,6 +392,9 @@ def write_markdown(out, summary, results):
     lines = [f"Robustness sweep: {summary['cases_judged']} of {summary['cases_planned']} cases judged, success "
              f"{percent(summary['success_rate'])}; false `named` on null recordings: {summary['false_named_on_null']}.", "",
              sd_line(summary["sd_coverage"]), "",
+             "Binaries (SHA-256, cases): " + ", ".join(f"{d} {n}" for d, n in summary["binaries"].items()) +
+             ("" if len(summary["binaries"]) == 1 and "not recorded" not in summary["binaries"]
+              else " — the cases may not all be one code's"), "",
              "| effect | size | " + " | ".join(f"procedure {p}" for p in procs) + " |",
              "|---|---|" + "---|" * len(procs)]
     rows = {}

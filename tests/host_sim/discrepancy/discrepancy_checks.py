@@ -262,6 +262,8 @@ def check_sweep(_name):
     expect(s["cases_judged"] == 2 and s["cases_planned"] >= 100, f"2 of {s['cases_planned']} planned cases judged")
     expect(s["success_rate"] == 1.0, f"both judged right: {s['failures']}")
     expect(s["false_named_on_null"] == 0, "no effect named on the null recording")
+    expect(len(s["binaries"]) == 1 and list(s["binaries"].values()) == [2] and "not recorded" not in s["binaries"],
+           f"one binary judged both cases, its digest recorded: {s['binaries']}")
     # The truth's own reach: the true ei_scale 1.3 explains its recording (the handle force's error
     # at least halved), and the null recording's model as given is its true model.
     reach = {n: json.load(open(os.path.join(out, "cases", n, "truth_reach.json"))) for n in cases}
