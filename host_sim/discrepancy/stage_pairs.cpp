@@ -198,8 +198,16 @@ nlohmann::ordered_json partner_screen_json(const std::vector<EffectSetFit>& scre
     return out;
 }
 
+/// How close to its neutral value (in finite-difference steps) a pair's member must stay to be
+/// taken as neutral: the fit's own resolution (it stops on a step under 1 % of the step). Half a
+/// step before 2026-12-01: a hidden viscous friction of 0.001 s/mm (half its 0.002 step) with EI
+/// 0.85 on procedure C, fitted as a pair (0.851, 0.00093 s/mm), was demoted to `ei_scale` alone
+/// and named so, the friction its prediction carried dropped from the name.
+constexpr double kNeutralInSteps = 0.01;
+
 /// A pair whose member stayed at its neutral values is that member's partner alone (the neutral
-/// effect changes nothing): it competes as a single effect.
+/// effect changes nothing, so the pair's prediction is the partner's): it competes as a single
+/// effect. A member anywhere else changes the prediction: the pair competes as a pair.
 void demote_neutral_members(const DiscrepancyContext& context, std::vector<EffectSetFit>& pairs) {
     for (EffectSetFit& p : pairs) {
         if (!p.ok) continue;
@@ -210,7 +218,7 @@ void demote_neutral_members(const DiscrepancyContext& context, std::vector<Effec
             for (std::size_t j = 0; j < c.parameters.size(); ++j)
                 if (c.parameters[j].key.rfind("direction_", 0) != 0 &&
                     std::abs(p.values[at + j] - c.parameters[j].neutral) >
-                        0.5 * c.parameters[j].step)
+                        kNeutralInSteps * c.parameters[j].step)
                     neutral = false;
             if (neutral) {
                 const std::size_t other = 1 - k;
