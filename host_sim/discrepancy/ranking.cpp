@@ -51,6 +51,7 @@ bool richer_yields(NestedCosts richer, NestedCosts simpler, bool fitted_close,
 void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>& fits) {
     if (fits.empty() || !fits.front().ok) return;
     const double tie = share_of(context, fits.front()) - kTieShare;
+    const double training_floor = context.training_noise_floor();
     std::size_t lead = 0;
     for (std::size_t k = 1; k < fits.size(); ++k)
         if (fits[k].ok && share_of(context, fits[k]) >= tie && fits[k].bic < fits[lead].bic)
@@ -66,7 +67,7 @@ void prefer_simpler(const DiscrepancyContext& context, std::vector<EffectSetFit>
                 richer_yields(
                     costs_of(fits[lead]), costs_of(fits[k]),
                     reduces_to(fits[lead].candidates[0], fits[lead].values, fits[k].candidates[0]),
-                    context.noise_floor, context.training_noise_floor());
+                    context.noise_floor, training_floor);
             const bool to_richer =
                 contains(fits[k], fits[lead]) &&
                 earns_its_parameters(fits[k].held_out_cost, fits[lead].held_out_cost,

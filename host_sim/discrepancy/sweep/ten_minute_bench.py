@@ -10,10 +10,9 @@ usage:
 
 Writes DIR/NAME/ (scenario.json, recorded/, discrepancy/) and DIR/bench.json, bench.csv and
 bench.md: per recording the verdict, the names and values fitted against the truth (judged by the
-sweep's rule), the runs, the workflow's own wall time, the command's, and its CPU time per wall
-second (about 2 on an idle 2-core machine: well below, other work took the cores and the time is
-not the bound's). Exit status: 0 every
-recording within 2 minutes, 1 one was slower or could not be run, 2 bad usage."""
+sweep's rule), the runs, the workflow's own wall time, the command's, and its CPU seconds per wall
+second (how much of the two cores it had). Exit status: 0 every recording within 2 minutes, 1 one
+was slower or could not be run, 2 bad usage."""
 import argparse
 import csv
 import json
@@ -70,7 +69,7 @@ def bench_one(scopekin, out, name, effects, seed):
         json.dump(scenario, f, indent=1)
     run([scopekin, "simulate", scenario_path, "--out", os.path.join(work, "recorded"), "--seed", str(seed)])
     wall, cpu = run([scopekin, "discrepancy", os.path.join(work, "recorded", "recording.csv"), "--out",
-                os.path.join(work, "discrepancy"), "--no-plots", "--quiet"])
+                     os.path.join(work, "discrepancy"), "--no-plots", "--quiet"])
     report = json.load(open(os.path.join(work, "discrepancy", "report.json")))
     judged = procedures.judge(report, effects)
     return {"name": name, "seed": seed, "hidden": effects, "verdict": report["verdict"], "named": judged["named"],
