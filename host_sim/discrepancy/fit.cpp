@@ -60,29 +60,6 @@ Point make_point(const DiscrepancyContext& context, std::vector<double> x, Model
     return pt;
 }
 
-/// The truth_effects entries of a fit's set at values x.
-nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x) {
-    nlohmann::json list = nlohmann::json::array();
-    std::size_t at = 0;
-    for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
-        const Candidate& c = candidate_library()[fit.candidates[k]];
-        const std::vector<double> v(
-            x.begin() + static_cast<std::ptrdiff_t>(at),
-            x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
-        list.push_back(c.entry(v, fit.held[k]));
-        at += c.parameters.size();
-    }
-    return list;
-}
-
-std::vector<FittedParameter> parameters_of(const EffectSetFit& fit) {
-    std::vector<FittedParameter> params;
-    for (std::size_t c : fit.candidates)
-        for (const FittedParameter& p : candidate_library()[c].parameters)
-            params.push_back(p);
-    return params;
-}
-
 /// One Levenberg-Marquardt iteration from `current`: the Jacobian (one run per parameter), then
 /// up to three steps, damped more after each that does not lower the cost. Returns whether to
 /// iterate again: not after a failed Jacobian run (`failure` says so), no accepted step, a step
@@ -140,6 +117,28 @@ bool iterate(const EffectSetFit& fit, const std::vector<FittedParameter>& params
 
 }  // namespace
 
+nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x) {
+    nlohmann::json list = nlohmann::json::array();
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < fit.candidates.size(); ++k) {
+        const Candidate& c = candidate_library()[fit.candidates[k]];
+        const std::vector<double> v(
+            x.begin() + static_cast<std::ptrdiff_t>(at),
+            x.begin() + static_cast<std::ptrdiff_t>(at + c.parameters.size()));
+        list.push_back(c.entry(v, fit.held[k]));
+        at += c.parameters.size();
+    }
+    return list;
+}
+
+std::vector<FittedParameter> parameters_of(const EffectSetFit& fit) {
+    std::vector<FittedParameter> params;
+    for (std::size_t c : fit.candidates)
+        for (const FittedParameter& p : candidate_library()[c].parameters)
+            params.push_back(p);
+    return params;
+}
+
 double bic_of(const DiscrepancyContext& context, const ModelPrediction& p, std::size_t parameters) {
     const Eigen::VectorXd r =
         context.residuals(p, SampleSet::fit_training)
@@ -154,6 +153,13 @@ std::vector<std::string> names_of(const EffectSetFit& fit) {
     for (std::size_t c : fit.candidates)
         names.push_back(candidate_library()[c].name);
     return names;
+}
+
+std::string set_name(const EffectSetFit& fit) {
+    std::string name;
+    for (const std::string& n : names_of(fit))
+        name += (name.empty() ? "" : " + ") + n;
+    return name;
 }
 
 std::vector<std::vector<double>> screen_grid(const std::vector<FittedParameter>& params,

@@ -58,6 +58,11 @@ EffectSetFit fit_effect_set(const std::vector<std::size_t>& set, const Discrepan
                             const std::vector<nlohmann::json>* held = nullptr,
                             int max_iterations = 3);
 
+/// The truth_effects entries of a fit's set at values `x` (its candidates' parameters in order).
+nlohmann::json entries_of(const EffectSetFit& fit, const std::vector<double>& x);
+/// The fitted parameters of a fit's set, its candidates' in order.
+std::vector<FittedParameter> parameters_of(const EffectSetFit& fit);
+
 /// Per residual row, sqrt(n_o) of its output: turns the 1/(sigma sqrt(n)) weighting of
 /// normalised_residuals into plain 1/sigma (chi-square residuals).
 Eigen::VectorXd sqrt_counts(const MeasuredRecording& data, const std::vector<double>& sigma,
@@ -92,6 +97,8 @@ double bic_of(const DiscrepancyContext& context, const ModelPrediction& p, std::
 
 /// The candidates of a fit by name.
 std::vector<std::string> names_of(const EffectSetFit& fit);
+/// And as one name, "a + b" for a pair.
+std::string set_name(const EffectSetFit& fit);
 
 /// The screening's search over a candidate's range (README step 4): the tensor grid of its
 /// parameters' `screen` values, each axis with its neutral value too, and what it found. No

@@ -457,6 +457,9 @@ PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<Effe
         std::vector<EffectSetFit> pairs =
             partners.empty() ? fit_pairs(context, screened, stages)
                              : fit_pairs_on_singles(context, screened, partners, stages);
+        // A pair's joint fit starts on a grid point and can stop there on a stepped cost.
+        for (EffectSetFit& p : pairs)
+            walk_valley(context, p, stages);
         demote_neutral_members(context, pairs);
         out.pair_test["members_refitted_alone"] =
             refit_members_alone(context, pairs, best, screened, stages);

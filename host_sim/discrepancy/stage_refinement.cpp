@@ -8,16 +8,6 @@
 #include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
-const Candidate* two_parameter_search(const DiscrepancyContext& context, const EffectSetFit& fit) {
-    if (context.evaluator.windowed()) return nullptr;  // long runs: the 10-minute budget
-    if (!fit.ok || fit.candidates.size() != 1) return nullptr;
-    const Candidate& c = candidate_library()[fit.candidates[0]];
-    if (c.parameters.size() != 2 || c.parameters[0].screen.empty() ||
-        c.parameters[1].screen.empty())
-        return nullptr;
-    return &c;
-}
-
 namespace {
 
 /// The runner-up is refined when its screening explained at least this share of the excess: its
@@ -53,14 +43,15 @@ std::pair<double, double> bracket_of(const FittedParameter& p, double x) {
 /// The line search's tries beyond the fit's own bracket: the screening profile's other dips.
 constexpr std::size_t kOtherDips = 2;
 
-/// Training runs of candidate `c` at each of `points` (its parameter values): the index of the
-/// lowest training cost and that cost (points.size() and infinity when every run failed).
+/// Training runs of `fit`'s effect set at each of `points` (its parameters' values, in order): the
+/// index of the lowest training cost and that cost (points.size() and infinity when every run
+/// failed).
 std::pair<std::size_t, double> lowest_training_cost(
-    const DiscrepancyContext& context, const Candidate& c, const nlohmann::json& held,
+    const DiscrepancyContext& context, const EffectSetFit& fit,
     const std::vector<std::vector<double>>& points) {
     std::vector<nlohmann::json> lists;
     for (const std::vector<double>& x : points)
-        lists.push_back(nlohmann::json::array({c.entry(x, held)}));
+        lists.push_back(entries_of(fit, x));
     const std::vector<ModelPrediction> runs =
         context.evaluator.run_all(lists, RunScope::fit_training);
     std::pair<std::size_t, double> lowest{points.size(), std::numeric_limits<double>::infinity()};
@@ -75,15 +66,14 @@ std::pair<std::size_t, double> lowest_training_cost(
 /// kLineRounds rounds of kLinePoints training runs inside (a, b), each round around the best so
 /// far (`from`, at `from_cost`, counts: the fit in its own bracket; NaN in another); lowers `best`
 /// / `best_cost` where a point beats them.
-void line_search(const DiscrepancyContext& context, const Candidate& c, const nlohmann::json& held,
-                 double a, double b, double from, double from_cost, double& best,
-                 double& best_cost) {
+void line_search(const DiscrepancyContext& context, const EffectSetFit& fit, double a, double b,
+                 double from, double from_cost, double& best, double& best_cost) {
     double centre = from, centre_cost = from_cost;
     for (int round = 0; round < kLineRounds; ++round) {
         std::vector<std::vector<double>> xs;
         for (int k = 1; k <= kLinePoints; ++k)
             xs.push_back({a + (b - a) * k / (kLinePoints + 1)});
-        const auto [lowest, round_cost] = lowest_training_cost(context, c, held, xs);
+        const auto [lowest, round_cost] = lowest_training_cost(context, fit, xs);
         const double round_best =
             lowest < xs.size() ? xs[lowest][0] : std::numeric_limits<double>::quiet_NaN();
         if (std::isnan(round_best) && std::isnan(centre)) return;
@@ -118,13 +108,13 @@ void refine_on_axis(const DiscrepancyContext& context, EffectSetFit& fit,
     const FittedParameter& p = c.parameters[0];
     double best = fit.values[0], best_cost = fit.training_cost;
     const auto own = bracket_of(p, best);
-    line_search(context, c, fit.held[0], own.first, own.second, best, best_cost, best, best_cost);
+    line_search(context, fit, own.first, own.second, best, best_cost, best, best_cost);
     std::size_t others = 0;
     for (double dip : profile_dips(profile)) {
         if (others == kOtherDips) break;
         if (dip >= own.first && dip <= own.second) continue;  // the fit's own basin
         const auto [a, b] = bracket_of(p, dip);
-        line_search(context, c, fit.held[0], a, b, std::numeric_limits<double>::quiet_NaN(),
+        line_search(context, fit, a, b, std::numeric_limits<double>::quiet_NaN(),
                     std::numeric_limits<double>::infinity(), best, best_cost);
         ++others;
     }
@@ -148,24 +138,29 @@ std::pair<double, double> wide_bracket_of(const FittedParameter& p, double x) {
     return {a > p.lo ? bracket_of(p, a).first : a, b < p.hi ? bracket_of(p, b).second : b};
 }
 
-/// Two-parameter candidates after Levenberg-Marquardt (and the nested restart): a derivative-free
-/// search on a kBoxPoints x kBoxPoints grid inside the box of each parameter's second neighbours on
-/// its screening axis, kBoxRounds rounds, each round around the best so far, then Levenberg-
-/// Marquardt from the best point. Why: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on
-/// a 320 mm insertion (procedure B) leaves a long, stepped valley (the data see the tip's factor
-/// and barely the slope): the fit from the screening's best point (0.5, 2.0) stopped poorer than
-/// ei_scale, and from ei_scale's (0.647, 0.647) it did not move. Keeps the fit when nothing beats
-/// it.
+}  // namespace
+
+std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit) {
+    if (!fit.ok) return {};
+    std::vector<FittedParameter> params = parameters_of(fit);
+    if (params.size() != 2 || params[0].screen.empty() || params[1].screen.empty()) return {};
+    return params;
+}
+
+/// Why a box: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on a 320 mm insertion
+/// (procedure B) leaves a long, stepped valley (the data see the tip's factor and barely the
+/// slope): the fit from the screening's best point (0.5, 2.0) stopped poorer than ei_scale, and
+/// from ei_scale's (0.647, 0.647) it did not move.
 void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages) {
-    const Candidate* two = two_parameter_search(context, fit);
-    if (!two) return;
-    const Candidate& c = *two;
-    stages.start("searching " + c.name + "'s box",
+    if (context.evaluator.windowed()) return;  // long runs: the 10-minute recording's budget
+    const std::vector<FittedParameter> params = two_screened_parameters(fit);
+    if (params.empty()) return;
+    stages.start("searching " + set_name(fit) + "'s box",
                  (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
     std::vector<double> best = fit.values;
     double best_cost = fit.training_cost;
-    std::array<std::pair<double, double>, 2> box = {wide_bracket_of(c.parameters[0], best[0]),
-                                                    wide_bracket_of(c.parameters[1], best[1])};
+    std::array<std::pair<double, double>, 2> box = {wide_bracket_of(params[0], best[0]),
+                                                    wide_bracket_of(params[1], best[1])};
     for (int round = 0; round < kBoxRounds; ++round) {
         std::vector<std::vector<double>> xs;
         std::array<double, 2> spacing{};
@@ -174,14 +169,14 @@ void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLo
         for (int u = 1; u <= kBoxPoints; ++u)
             for (int v = 1; v <= kBoxPoints; ++v)
                 xs.push_back({box[0].first + spacing[0] * u, box[1].first + spacing[1] * v});
-        const auto [lowest, cost] = lowest_training_cost(context, c, fit.held[0], xs);
+        const auto [lowest, cost] = lowest_training_cost(context, fit, xs);
         if (lowest < xs.size() && cost < best_cost) {
             best = xs[lowest];
             best_cost = cost;
         }
         for (std::size_t j = 0; j < 2; ++j)
-            box[j] = {std::max(c.parameters[j].lo, best[j] - spacing[j]),
-                      std::min(c.parameters[j].hi, best[j] + spacing[j])};
+            box[j] = {std::max(params[j].lo, best[j] - spacing[j]),
+                      std::min(params[j].hi, best[j] + spacing[j])};
     }
     if (!(best_cost < fit.training_cost)) return;
     EffectSetFit there = fit_effect_set(fit.candidates, context, &best, &fit.held);
@@ -190,6 +185,8 @@ void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLo
         fit = std::move(there);
     }
 }
+
+namespace {
 
 /// Starts for `target` from a nested `source` that fits better: the richer from the simpler's
 /// values (nested_start: ei_scale f as ei_profile (f, f)), or the simpler near the richer's

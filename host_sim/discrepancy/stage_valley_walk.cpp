@@ -1,4 +1,4 @@
-// The refinement's valley walk for two-parameter candidates (stages.hpp, walk_valley).
+// The valley walk for two-parameter fits, a candidate or a pair (stages.hpp, walk_valley).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -34,20 +34,20 @@ double chi2_of(const DiscrepancyContext& context, const ModelPrediction& p) {
         .squaredNorm();
 }
 
-/// Training runs of candidate `c` at each of `points` (its parameter values).
-std::vector<ModelPrediction> training_runs(const DiscrepancyContext& context, const Candidate& c,
-                                           const nlohmann::json& held,
+/// Training runs of `fit`'s effect set at each of `points` (its parameters' values, in order).
+std::vector<ModelPrediction> training_runs(const DiscrepancyContext& context,
+                                           const EffectSetFit& fit,
                                            const std::vector<std::vector<double>>& points) {
     std::vector<nlohmann::json> lists;
     for (const std::vector<double>& x : points)
-        lists.push_back(nlohmann::json::array({c.entry(x, held)}));
+        lists.push_back(entries_of(fit, x));
     return context.evaluator.run_all(lists, RunScope::fit_training);
 }
 
 /// Training runs at `points`; the lowest (infinite cost when every run failed).
-ValleyPoint lowest_of(const DiscrepancyContext& context, const Candidate& c,
-                      const nlohmann::json& held, const std::vector<std::vector<double>>& points) {
-    const std::vector<ModelPrediction> runs = training_runs(context, c, held, points);
+ValleyPoint lowest_of(const DiscrepancyContext& context, const EffectSetFit& fit,
+                      const std::vector<std::vector<double>>& points) {
+    const std::vector<ModelPrediction> runs = training_runs(context, fit, points);
     ValleyPoint lowest;
     for (std::size_t k = 0; k < runs.size(); ++k) {
         if (!runs[k].ok) continue;
@@ -60,10 +60,11 @@ ValleyPoint lowest_of(const DiscrepancyContext& context, const Candidate& c,
 /// The valley's floor where parameter `along` is `at`: kCrossRounds rounds of kCrossPoints runs of
 /// the other parameter inside ± kCrossHalfWidthInSteps of its step about `centre`, each round
 /// around the best so far.
-ValleyPoint cross_valley(const DiscrepancyContext& context, const Candidate& c,
-                         const nlohmann::json& held, std::size_t along, double at, double centre) {
+ValleyPoint cross_valley(const DiscrepancyContext& context, const EffectSetFit& fit,
+                         const std::vector<FittedParameter>& params, std::size_t along, double at,
+                         double centre) {
     const std::size_t across = 1 - along;
-    const FittedParameter& p = c.parameters[across];
+    const FittedParameter& p = params[across];
     double half = kCrossHalfWidthInSteps * p.step;
     ValleyPoint best;
     for (int round = 0; round < kCrossRounds; ++round) {
@@ -74,7 +75,7 @@ ValleyPoint cross_valley(const DiscrepancyContext& context, const Candidate& c,
             x[across] = std::clamp(centre - half + 2.0 * half * k / (kCrossPoints - 1), p.lo, p.hi);
             points.push_back(std::move(x));
         }
-        const ValleyPoint round_best = lowest_of(context, c, held, points);
+        const ValleyPoint round_best = lowest_of(context, fit, points);
         if (round_best.cost < best.cost) best = round_best;
         if (!std::isfinite(best.cost)) return best;
         centre = best.x[across];
@@ -85,17 +86,17 @@ ValleyPoint cross_valley(const DiscrepancyContext& context, const Candidate& c,
 
 /// The parameter the training cost changes least along: the fit moved one finite-difference step
 /// either way in each (4 runs).
-std::size_t weaker_parameter(const DiscrepancyContext& context, const Candidate& c,
-                             const EffectSetFit& fit) {
+std::size_t weaker_parameter(const DiscrepancyContext& context, const EffectSetFit& fit,
+                             const std::vector<FittedParameter>& params) {
     std::vector<std::vector<double>> points;
     for (std::size_t j = 0; j < 2; ++j)
         for (double sign : {-1.0, 1.0}) {
             std::vector<double> x = fit.values;
-            const FittedParameter& p = c.parameters[j];
+            const FittedParameter& p = params[j];
             x[j] = std::clamp(x[j] + sign * p.step, p.lo, p.hi);
             points.push_back(std::move(x));
         }
-    const std::vector<ModelPrediction> runs = training_runs(context, c, fit.held[0], points);
+    const std::vector<ModelPrediction> runs = training_runs(context, fit, points);
     double rise[2] = {0.0, 0.0};
     for (std::size_t k = 0; k < runs.size(); ++k)
         rise[k / 2] += runs[k].ok
@@ -108,11 +109,12 @@ std::size_t weaker_parameter(const DiscrepancyContext& context, const Candidate&
 /// One direction of the walk from `start`: steps of parameter `along` by its finite-difference
 /// step, the other predicted by the valley's slope so far and searched across (cross_valley).
 /// Appends the floor points to `profile`; returns the lowest.
-ValleyPoint walk_one_way(const DiscrepancyContext& context, const Candidate& c,
-                         const nlohmann::json& held, std::size_t along, double direction,
-                         const ValleyPoint& start, nlohmann::ordered_json& profile) {
+ValleyPoint walk_one_way(const DiscrepancyContext& context, const EffectSetFit& fit,
+                         const std::vector<FittedParameter>& params, std::size_t along,
+                         double direction, const ValleyPoint& start,
+                         nlohmann::ordered_json& profile) {
     const std::size_t across = 1 - along;
-    const FittedParameter& q = c.parameters[along];
+    const FittedParameter& q = params[along];
     const double step = direction * q.step;
     ValleyPoint previous = start, best = start;
     double slope = 0.0;  // d(across)/d(along) on the floor
@@ -121,7 +123,7 @@ ValleyPoint walk_one_way(const DiscrepancyContext& context, const Candidate& c,
         const double at = previous.x[along] + step;
         if (at < q.lo || at > q.hi) break;
         const ValleyPoint floor =
-            cross_valley(context, c, held, along, at, previous.x[across] + slope * step);
+            cross_valley(context, fit, params, along, at, previous.x[across] + slope * step);
         if (!std::isfinite(floor.cost)) break;
         profile.push_back(
             {{"values", floor.x}, {"training_cost", floor.cost}, {"training_chi2", floor.chi2}});
@@ -140,17 +142,17 @@ ValleyPoint walk_one_way(const DiscrepancyContext& context, const Candidate& c,
 /// The walk's lowest floor point narrowed down: the floor searched at half and a quarter of the
 /// walk's step either side of the best so far (4 more cross_valley searches). Appends them to
 /// `profile`; returns the lowest.
-ValleyPoint narrow_down(const DiscrepancyContext& context, const Candidate& c,
-                        const nlohmann::json& held, std::size_t along, ValleyPoint best,
-                        nlohmann::ordered_json& profile) {
-    const FittedParameter& q = c.parameters[along];
+ValleyPoint narrow_down(const DiscrepancyContext& context, const EffectSetFit& fit,
+                        const std::vector<FittedParameter>& params, std::size_t along,
+                        ValleyPoint best, nlohmann::ordered_json& profile) {
+    const FittedParameter& q = params[along];
     for (double fraction : {0.5, 0.25}) {
         const ValleyPoint centre = best;
         for (double direction : {-1.0, 1.0}) {
             const double at = centre.x[along] + direction * fraction * q.step;
             if (at < q.lo || at > q.hi) continue;
             const ValleyPoint floor =
-                cross_valley(context, c, held, along, at, centre.x[1 - along]);
+                cross_valley(context, fit, params, along, at, centre.x[1 - along]);
             if (!std::isfinite(floor.cost)) continue;
             profile.push_back({{"values", floor.x},
                                {"training_cost", floor.cost},
@@ -164,12 +166,12 @@ ValleyPoint narrow_down(const DiscrepancyContext& context, const Candidate& c,
 }  // namespace
 
 void walk_valley(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages) {
-    const Candidate* two = two_parameter_search(context, fit);
-    if (!two) return;
-    const Candidate& c = *two;
-    stages.start("walking " + c.name + "'s valley",
+    if (context.evaluator.windowed()) return;  // long runs: the 10-minute recording's budget
+    const std::vector<FittedParameter> params = two_screened_parameters(fit);
+    if (params.empty()) return;
+    stages.start("walking " + set_name(fit) + "'s valley",
                  (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
-    const std::size_t along = weaker_parameter(context, c, fit);
+    const std::size_t along = weaker_parameter(context, fit, params);
     const ValleyPoint start{fit.values, fit.training_cost, chi2_of(context, fit.prediction)};
     nlohmann::ordered_json profile = nlohmann::ordered_json::array();
     profile.push_back({{"values", fit.values},
@@ -178,16 +180,16 @@ void walk_valley(const DiscrepancyContext& context, EffectSetFit& fit, StageLog&
     ValleyPoint best = start;
     for (double direction : {1.0, -1.0}) {
         const ValleyPoint found =
-            walk_one_way(context, c, fit.held[0], along, direction, start, profile);
+            walk_one_way(context, fit, params, along, direction, start, profile);
         if (found.cost < best.cost) best = found;
     }
-    best = narrow_down(context, c, fit.held[0], along, best, profile);
+    best = narrow_down(context, fit, params, along, best, profile);
     std::sort(profile.begin(), profile.end(), [&](const auto& a, const auto& b) {
         return a["values"][along].template get<double>() <
                b["values"][along].template get<double>();
     });
     nlohmann::ordered_json walk = {
-        {"along", c.parameters[along].key}, {"from", fit.values}, {"floor", profile}};
+        {"along", params[along].key}, {"from", fit.values}, {"floor", profile}};
     if (best.cost < fit.training_cost) {
         EffectSetFit there = fit_effect_set(fit.candidates, context, &best.x, &fit.held);
         if (there.ok && there.training_cost < fit.training_cost) {

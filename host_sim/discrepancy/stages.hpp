@@ -81,13 +81,20 @@ std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
                                             const std::vector<EffectSetFit>& screened,
                                             StageLog& stages);
 
-/// The candidate of a working single-effect fit whose two parameters both have screening axes,
-/// when not fitted on windows (long runs: the 10-minute recording's budget): what the box search
-/// and the valley walk work on. Null otherwise.
-const Candidate* two_parameter_search(const DiscrepancyContext& context, const EffectSetFit& fit);
+/// The parameters of a working fit (one candidate or a pair) that has two in all, both with
+/// screening axes: what the box search and the valley walk work on. Empty otherwise.
+std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit);
 
-/// Two-parameter single candidates (not on windows): the valley of the training cost walked from
-/// the fit. The parameter the cost changes least along is stepped by its finite-difference step
+/// Two-parameter fits (two_screened_parameters; not on windows, the 10-minute recording's budget)
+/// after Levenberg-Marquardt: a derivative-free search on a 5 x 5 grid inside the box of each
+/// parameter's second neighbours on its screening axis, two rounds, each around the best so far,
+/// then Levenberg-Marquardt from the best point; kept where it fits the training blocks better.
+/// Why: a training cost that steps with event timing stops the finite-difference iteration short
+/// (stage_refinement.cpp has the case).
+void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages);
+
+/// Two-parameter fits (two_screened_parameters: a candidate, or a pair) not on windows: the valley
+/// of the training cost walked from the fit. The parameter the cost changes least along is stepped by its finite-difference step
 /// (6 steps each way at most, stopping after 2 that rise), the other searched across the valley
 /// at each (2 rounds of 7 runs within ± 0.4 of its step about the floor the valley's slope
 /// predicts); the lowest floor point is narrowed down at half and a quarter of the step either
@@ -96,7 +103,11 @@ const Candidate* two_parameter_search(const DiscrepancyContext& context, const E
 /// valley about 0.02 wide in the tip factor whose floor falls smoothly from ei_scale's (0.645,
 /// 0.645) at 7.5 to 4.6 at the truth, while a tip factor 0.01 low lets a stick-and-release go at
 /// another time (19 to 20): finite differences of 0.1 and the box's grid both cross it, and
-/// the fit stayed at the uniform (0.645, 0.645). The floor is in report.json's candidates
+/// the fit stayed at the uniform (0.645, 0.645). And a pair (try_pairs walks each fitted pair):
+/// hidden viscous friction 0.006 s/mm with tissue stiffening 0.3 /N on procedure C, fitted from
+/// the partner screen's grid point (0.00594 s/mm, 0.15 /N), made no step (training cost 119,
+/// held-out 179 against a noise floor of 5; the box's 5 x 5 grid, 0.0023 s/mm apart, missed the
+/// valley), and stiffening was named at half its value. The floor is in report.json's candidates
 /// ("valley_walk").
 void walk_valley(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages);
 

@@ -20,6 +20,7 @@
 #include "host_sim/discrepancy/robust_objective.hpp"
 #include "host_sim/discrepancy/sigmoid_frequency.hpp"
 #include "host_sim/discrepancy/sigmoid_load.hpp"
+#include "host_sim/discrepancy/stages.hpp"
 
 namespace scopekin::discrepancy {
 namespace {
@@ -218,6 +219,35 @@ TEST(DiscrepancyPairMembers, WithinAStepIsParameterByParameterOnTheLibrarysSteps
     EXPECT_FALSE(within_a_step(profile, {0.75}, {0.75, 1.15}));        // wrong sizes
     EXPECT_FALSE(within_a_step(candidate_library().size(), {1.0}, {1.0}));
     EXPECT_FALSE(within_a_step(viscous, {std::nan("")}, {0.002}));
+}
+
+// The box search and the valley walk work on any fit with two parameters in all, each with a screening axis: a
+// two-parameter candidate (ei_profile's tip and handle) or a pair of one-parameter candidates (the
+// sweep's viscous friction with tissue stiffening); not a pair with three parameters, nor the
+// sigmoid motion (screened by its periodogram, no axes), nor a fit that failed.
+TEST(DiscrepancyBoxSearch, TwoScreenedParametersInAllAlonePairedOrNot) {
+    auto fit_of = [](std::vector<std::size_t> set) {
+        EffectSetFit f;
+        f.candidates = std::move(set);
+        f.ok = true;
+        return f;
+    };
+    const std::size_t viscous = library_index("viscoadhesive_friction"),
+                      stiffening = library_index("tissue_stiffening"),
+                      profile = library_index("ei_profile"), scale = library_index("ei_scale"),
+                      mobility = library_index("sigmoid_mobility");
+    const std::vector<FittedParameter> pair =
+        two_screened_parameters(fit_of({viscous, stiffening}));
+    ASSERT_EQ(pair.size(), 2u);
+    EXPECT_EQ(pair[0].key, "viscous_coefficient_s_per_mm");
+    EXPECT_EQ(pair[1].key, "stiffening_per_N");
+    EXPECT_EQ(two_screened_parameters(fit_of({profile})).size(), 2u);
+    EXPECT_TRUE(two_screened_parameters(fit_of({scale})).empty());
+    EXPECT_TRUE(two_screened_parameters(fit_of({profile, viscous})).empty());
+    EXPECT_TRUE(two_screened_parameters(fit_of({mobility})).empty());
+    EffectSetFit failed = fit_of({viscous, stiffening});
+    failed.ok = false;
+    EXPECT_TRUE(two_screened_parameters(failed).empty());
 }
 }  // namespace
 }  // namespace scopekin::discrepancy
