@@ -94,11 +94,12 @@ std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit);
 void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages);
 
 /// Two-parameter fits (two_screened_parameters: a candidate, or a pair) not on windows: the valley
-/// of the training cost walked from the fit. The parameter the cost changes least along is stepped by its finite-difference step
-/// (6 steps each way at most, stopping after 2 that rise), the other searched across the valley
-/// at each (2 rounds of 7 runs within ± 0.4 of its step about the floor the valley's slope
-/// predicts); the lowest floor point is narrowed down at half and a quarter of the step either
-/// side, then Levenberg-Marquardt from there; kept where it fits better.
+/// of the training cost walked from the fit. The parameter the cost changes least along is
+/// stepped by its finite-difference step (6 steps each way at most, stopping after 2 that rise),
+/// the other searched across the valley at each (2 rounds of 7 runs within ± 0.4 of its step
+/// about the floor the valley's slope predicts); the lowest floor point is narrowed down at half
+/// and a quarter of the step either side, then Levenberg-Marquardt from there; kept where it fits
+/// better.
 /// Why: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on procedure B leaves a
 /// valley about 0.02 wide in the tip factor whose floor falls smoothly from ei_scale's (0.645,
 /// 0.645) at 7.5 to 4.6 at the truth, while a tip factor 0.01 low lets a stick-and-release go at
