@@ -224,7 +224,8 @@ TEST(DiscrepancyPairMembers, WithinAStepIsParameterByParameterOnTheLibrarysSteps
 // The box search and the valley walk work on any fit with two parameters in all, each with a
 // screening axis: a two-parameter candidate (ei_profile's tip and handle) or a pair of
 // one-parameter candidates (the sweep's viscous friction with tissue stiffening); not a pair with
-// three parameters, nor the sigmoid motion (screened by its periodogram, no axes), nor a failed fit.
+// three parameters, nor the sigmoid motion (screened by its periodogram, no axes), nor a failed
+// fit.
 TEST(DiscrepancyBoxSearch, TwoScreenedParametersInAllAlonePairedOrNot) {
     auto fit_of = [](std::vector<std::size_t> set) {
         EffectSetFit f;
