@@ -147,6 +147,10 @@ std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit) {
     return params;
 }
 
+bool leaves_training_excess(double training_cost, double training_noise_floor) {
+    return !(training_cost - training_noise_floor < kMinRestCost);  // a NaN cost leaves excess
+}
+
 /// Why a box: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on a 320 mm insertion
 /// (procedure B) leaves a long, stepped valley (the data see the tip's factor and barely the
 /// slope): the fit from the screening's best point (0.5, 2.0) stopped poorer than ei_scale, and
@@ -154,7 +158,9 @@ std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit) {
 void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages) {
     if (context.evaluator.windowed()) return;  // long runs: the 10-minute recording's budget
     const std::vector<FittedParameter> params = two_screened_parameters(fit);
-    if (params.empty()) return;
+    if (params.empty() ||
+        !leaves_training_excess(fit.training_cost, context.training_noise_floor()))
+        return;
     stages.start("searching " + set_name(fit) + "'s box",
                  (2.0 + static_cast<double>(kRefined)) / kProgressSteps);
     std::vector<double> best = fit.values;

@@ -183,7 +183,10 @@ void walk_valley(const DiscrepancyContext& context, EffectSetFit& fit, StageLog&
             walk_one_way(context, fit, params, along, direction, start, profile);
         if (found.cost < best.cost) best = found;
     }
-    best = narrow_down(context, fit, params, along, best, profile);
+    // At the noise floor the walk's steps still measure the valley's width (the SD); narrowing
+    // down could only move the fit within the noise.
+    if (leaves_training_excess(best.cost, context.training_noise_floor()))
+        best = narrow_down(context, fit, params, along, best, profile);
     std::sort(profile.begin(), profile.end(), [&](const auto& a, const auto& b) {
         return a["values"][along].template get<double>() <
                b["values"][along].template get<double>();

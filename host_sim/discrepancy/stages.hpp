@@ -85,21 +85,29 @@ std::vector<EffectSetFit> refine_candidates(const DiscrepancyContext& context,
 /// screening axes: what the box search and the valley walk work on. Empty otherwise.
 std::vector<FittedParameter> two_screened_parameters(const EffectSetFit& fit);
 
-/// Two-parameter fits (two_screened_parameters; not on windows, the 10-minute recording's budget)
-/// after Levenberg-Marquardt: a derivative-free search on a 5 x 5 grid inside the box of each
-/// parameter's second neighbours on its screening axis, two rounds, each around the best so far,
-/// then Levenberg-Marquardt from the best point; kept where it fits the training blocks better.
+/// Whether a fit with `training_cost` still leaves kMinRestCost (ranking.hpp) or more above
+/// `training_noise_floor` (what noise alone gives): one that leaves less cannot be told from the
+/// truth by this recording, so the box search skips it and the valley walk does not narrow its
+/// floor down (its steps still give the SD the valley's width). Measured on the robustness sweep:
+/// all 7 walks (of 22) that started there ended where they began.
+bool leaves_training_excess(double training_cost, double training_noise_floor);
+
+/// Two-parameter fits (two_screened_parameters; not on windows, the 10-minute recording's budget,
+/// nor at the noise floor, leaves_training_excess) after Levenberg-Marquardt: a derivative-free
+/// search on a 5 x 5 grid inside the box of each parameter's second neighbours on its screening
+/// axis, two rounds, each around the best so far, then Levenberg-Marquardt from the best point;
+/// kept where it fits the training blocks better.
 /// Why: a training cost that steps with event timing stops the finite-difference iteration short
 /// (stage_refinement.cpp has the case).
 void refine_in_box(const DiscrepancyContext& context, EffectSetFit& fit, StageLog& stages);
 
 /// Two-parameter fits (two_screened_parameters: a candidate, or a pair) not on windows: the valley
-/// of the training cost walked from the fit. The parameter the cost changes least along is
-/// stepped by its finite-difference step (6 steps each way at most, stopping after 2 that rise),
-/// the other searched across the valley at each (2 rounds of 7 runs within ± 0.4 of its step
-/// about the floor the valley's slope predicts); the lowest floor point is narrowed down at half
-/// and a quarter of the step either side, then Levenberg-Marquardt from there; kept where it fits
-/// better.
+/// of the training cost walked from the fit. The parameter the cost changes least along is stepped
+/// by its finite-difference step (6 steps each way at most, stopping after 2 that rise), the other
+/// searched across the valley at each (2 rounds of 7 runs within ± 0.4 of its step about the
+/// floor the valley's slope predicts); the lowest floor point, unless at the noise floor
+/// (leaves_training_excess), is narrowed down at half and a quarter of the step either side, then
+/// Levenberg-Marquardt from there; kept where it fits better.
 /// Why: a hidden distal softening (ei_profile tip 0.6, handle 1.0) on procedure B leaves a
 /// valley about 0.02 wide in the tip factor whose floor falls smoothly from ei_scale's (0.645,
 /// 0.645) at 7.5 to 4.6 at the truth, while a tip factor 0.01 low lets a stick-and-release go at

@@ -250,6 +250,19 @@ TEST(DiscrepancyBoxSearch, TwoScreenedParametersInAllAlonePairedOrNot) {
     failed.ok = false;
     EXPECT_TRUE(two_screened_parameters(failed).empty());
 }
+
+// The box search and the valley walk's narrowing leave a fit alone once what it leaves above the
+// noise floor is below the ranking's smallest excess (kMinRestCost, 0.5): the sweep's walks that
+// started there (training cost 4.7-5.25 against floors of 5 and 6) never moved, while the C pair
+// that needed its walk started at 119 against 5.
+TEST(DiscrepancyBoxSearch, NoFurtherSearchOnceTheFitIsAtTheNoiseFloor) {
+    EXPECT_FALSE(leaves_training_excess(5.17, 6.0));  // below the floor: noise fitted
+    EXPECT_FALSE(leaves_training_excess(5.03, 5.0));
+    EXPECT_FALSE(leaves_training_excess(5.0 + kMinRestCost - 1e-9, 5.0));
+    EXPECT_TRUE(leaves_training_excess(5.0 + kMinRestCost, 5.0));
+    EXPECT_TRUE(leaves_training_excess(119.2, 5.0));
+    EXPECT_TRUE(leaves_training_excess(std::numeric_limits<double>::quiet_NaN(), 5.0));
+}
 }  // namespace
 }  // namespace scopekin::discrepancy
 
