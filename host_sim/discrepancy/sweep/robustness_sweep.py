@@ -321,6 +321,42 @@ def sd_coverage(results):
             "within_2_sd": sum(v <= 2 for v in z) / len(z), "median_error_in_sd": sorted(z)[len(z) // 2]}
 
 
+def profile_dips(costs):
+    """Indices of a screening profile's dips: grid points whose training cost is below each
+    neighbour's (an end counts against its one neighbour), as `profile_dips` in fit.cpp."""
+    return [k for k, c in enumerate(costs)
+            if (k == 0 or c < costs[k - 1]) and (k == len(costs) - 1 or c < costs[k + 1])]
+
+
+def profile_shapes(out, results):
+    """How many dips the hidden effect's screening profile has (its lowest training cost along each
+    parameter's grid, on the capped objective), over every judged case with one hidden effect: the
+    issue asks the objective to make it unimodal. Effects screened without a grid (the sigmoid
+    motion, by its periodogram) have none."""
+    profiles = []
+    for r in results:
+        if len(r.get("hidden", [])) != 1:
+            continue
+        path = os.path.join(out, "cases", r["name"], "discrepancy", "report.json")
+        if not os.path.isfile(path):
+            continue
+        screened = (json.load(open(path)).get("screening") or {}).get("candidates", [])
+        for c in screened:
+            if c.get("effect") != r["hidden"][0]["name"]:
+                continue
+            for prof in (c.get("grid") or {}).get("profile", []):
+                costs = prof["lowest_training_cost"]
+                if len(costs) < 3 or not all(isinstance(v, (int, float)) for v in costs):
+                    continue
+                dips = profile_dips(costs)
+                profiles.append({"case": r["name"], "parameter": prof["parameter"], "dips": len(dips),
+                                 "at": [prof["values"][k] for k in dips]})
+    single = [q for q in profiles if q["dips"] == 1]
+    return {"profiles": len(profiles), "unimodal": len(single),
+            "share_unimodal": len(single) / len(profiles) if profiles else None,
+            "not_one_dip": [q for q in profiles if q["dips"] != 1]}
+
+
 def cmd_summarise(args):
     results = load_results(args.out)
     reach = load_truth_reach(args.out)
@@ -346,6 +382,7 @@ def cmd_summarise(args):
                       "hidden_listed_as_equal": bool(r.get("hidden_listed_as_equal"))}
                      for r in results if not r["success"]],
         "sd_coverage": sd_coverage(results),
+        "screening_profiles": profile_shapes(args.out, results),
         # Which binaries judged the cases (a count is one code's only with one digest).
         "binaries": {d: sum(1 for r in results if r.get("scopekin_sha256", "not recorded") == d)
                      for d in sorted({r.get("scopekin_sha256", "not recorded") for r in results})},
@@ -383,6 +420,16 @@ def sd_line(c):
             f"{c['median_error_in_sd']:.3g} SDs.")
 
 
+def profile_line(p):
+    if not p["profiles"]:
+        return "No screening profile of a hidden effect to look at."
+    other = "; ".join(f"`{q['case']}` {q['parameter']}: {q['dips']} dips at " + ", ".join(f"{v:g}" for v in q["at"])
+                      for q in p["not_one_dip"])
+    return (f"The hidden effect's screening profile (its lowest training cost along each parameter's grid, "
+            f"{p['profiles']} profiles of single-effect cases): one dip in {p['unimodal']} "
+            f"({percent(p['share_unimodal'])})" + (f"; otherwise: {other}." if other else "."))
+
+
 def percent(x):
     return "–" if x is None else f"{100 * x:.0f} %"
 
@@ -392,6 +439,7 @@ def write_markdown(out, summary, results):
     lines = [f"Robustness sweep: {summary['cases_judged']} of {summary['cases_planned']} cases judged, success "
              f"{percent(summary['success_rate'])}; false `named` on null recordings: {summary['false_named_on_null']}.", "",
              sd_line(summary["sd_coverage"]), "",
+             profile_line(summary["screening_profiles"]), "",
              "Binaries (SHA-256, cases): " + ", ".join(f"{d} {n}" for d, n in summary["binaries"].items()) +
              ("" if len(summary["binaries"]) == 1 and "not recorded" not in summary["binaries"]
               else " — the cases may not all be one code's"), "",

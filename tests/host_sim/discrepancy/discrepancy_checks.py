@@ -21,6 +21,7 @@ CHECK, SCOPEKIN, WORK, SOURCE = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[
 sys.path.insert(0, os.path.join(SOURCE, "host_sim", "discrepancy", "sweep"))
 import procedures  # noqa: E402
 from procedures import COMPARED, truth_value  # noqa: E402
+from robustness_sweep import profile_dips  # noqa: E402
 # One check also draws the report's plots and has them checked (the others skip them for time).
 PLOTTED = "ei_scale"
 SECOND_PASS = "ei_scale"  # then run again on its own model.json (check_second_pass)
@@ -272,6 +273,11 @@ def check_sweep(_name):
            f"the true ei_scale 1.3 explains its recording, the model as given does not: {reach['ei_scale-1.3-B']}")
     expect(reach["null-noise2x-B"]["meets_bar"] and reach["null-noise2x-B"]["model_as_given_verdict"] == "none",
            f"the null recording: the model as given agrees: {reach['null-noise2x-B']}")
+    # The hidden ei_scale's screening profile has one dip; dips counted as fit.cpp's profile_dips does.
+    shapes = s["screening_profiles"]
+    expect(shapes["profiles"] == 1 and shapes["unimodal"] == 1, f"one screening profile, one dip: {shapes}")
+    expect(profile_dips([3, 1, 2, 0.5, 4]) == [1, 3] and profile_dips([1, 2, 3]) == [0] and profile_dips([2, 2, 2]) == [],
+           "the profile's dips: below each neighbour, an end against its one")
     t = s["truth_reach"]
     expect(t["cases_measured"] == 2 and t["true_model_meets_bar"] == 2 and t["success_rate_where_true_model_meets_bar"] == 1.0,
            f"summarised: the true model meets the bar on both, both right: {t}")
