@@ -426,7 +426,7 @@ def profile_line(p):
     other = "; ".join(f"`{q['case']}` {q['parameter']}: {q['dips']} dips at " + ", ".join(f"{v:g}" for v in q["at"])
                       for q in p["not_one_dip"])
     return (f"The hidden effect's screening profile (its lowest training cost along each parameter's grid, "
-            f"{p['profiles']} profiles of single-effect cases): one dip in {p['unimodal']} "
+            f"{p['profiles']} profile{'' if p['profiles'] == 1 else 's'} of single-effect cases): one dip in {p['unimodal']} "
             f"({percent(p['share_unimodal'])})" + (f"; otherwise: {other}." if other else "."))
 
 
