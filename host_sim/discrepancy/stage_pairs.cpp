@@ -381,13 +381,23 @@ std::vector<const EffectSetFit*> singles_to_pair(const DiscrepancyContext& conte
 /// The partners of each of `singles` screened on its residual (screen_partners), best first,
 /// written into `pair_test`; none when the best removes less than kMinScreenedPartnerGain of the
 /// excess the best single (the first) leaves. Not on windows (long runs: the 10-minute
-/// recording's budget).
+/// recording's budget), nor when the best single leaves no excess over the training noise floor.
 std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
                                              const std::vector<const EffectSetFit*>& singles,
                                              const std::vector<EffectSetFit>& screened,
                                              nlohmann::ordered_json& pair_test, StageLog& stages) {
     if (context.evaluator.windowed()) {
         pair_test["partner_screen"] = "not run: fitted on windows";
+        return {};
+    }
+    const EffectSetFit& best = *singles.front();
+    const double cost = context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
+    const double excess = cost - context.training_noise_floor();
+    if (!leaves_excess_for_a_partner(cost, context.training_noise_floor())) {
+        pair_test["partner_screen"] =
+            "not run: the best single effect leaves no excess over the training noise floor";
+        pair_test["partner_screen_gain"] = 0.0;
+        pair_test["partner_screen_threshold"] = kMinScreenedPartnerGain;
         return {};
     }
     std::string names;
@@ -405,12 +415,8 @@ std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
                      [](const PartnerScreen& a, const PartnerScreen& b) {
                          return a.training_cost < b.training_cost;
                      });
-    const EffectSetFit& best = *singles.front();
-    const double cost = context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
-    const double excess = cost - context.training_noise_floor();
-    const double screened_gain = partners.empty() || !(excess > 0.0)
-                                     ? 0.0
-                                     : (cost - partners.front().training_cost) / excess;
+    const double screened_gain =
+        partners.empty() ? 0.0 : (cost - partners.front().training_cost) / excess;
     pair_test["partner_screen"] = partner_screen_json(screened, partners, cost, excess);
     pair_test["partner_screen_gain"] = screened_gain;
     pair_test["partner_screen_threshold"] = kMinScreenedPartnerGain;
@@ -419,6 +425,10 @@ std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
 }
 
 }  // namespace
+
+bool leaves_excess_for_a_partner(double training_cost, double training_noise_floor) {
+    return training_cost - training_noise_floor > 0.0;
+}
 
 PairsOutcome try_pairs(const DiscrepancyContext& context, const std::vector<EffectSetFit>& screened,
                        std::vector<EffectSetFit>& candidates, StageLog& stages) {

@@ -263,6 +263,17 @@ TEST(DiscrepancyBoxSearch, NoFurtherSearchOnceTheFitIsAtTheNoiseFloor) {
     EXPECT_TRUE(leaves_training_excess(119.2, 5.0));
     EXPECT_TRUE(leaves_training_excess(std::numeric_limits<double>::quiet_NaN(), 5.0));
 }
+
+// A partner's screened gain is the share of the single's training excess it removes: a single at
+// or below the noise floor leaves none (the ei_profile check's walked fit: 4.90 against 5.0), so
+// no partner can gain and the screen is not run.
+TEST(DiscrepancyPairs, NoPartnerScreenWithoutExcessOverTheNoiseFloor) {
+    EXPECT_FALSE(leaves_excess_for_a_partner(4.90, 5.0));
+    EXPECT_FALSE(leaves_excess_for_a_partner(5.0, 5.0));
+    EXPECT_FALSE(leaves_excess_for_a_partner(std::numeric_limits<double>::quiet_NaN(), 5.0));
+    EXPECT_TRUE(leaves_excess_for_a_partner(5.0 + 1e-9, 5.0));
+    EXPECT_TRUE(leaves_excess_for_a_partner(61.0, 3.8));
+}
 }  // namespace
 }  // namespace scopekin::discrepancy
 
