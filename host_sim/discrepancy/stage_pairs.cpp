@@ -392,8 +392,9 @@ std::vector<PartnerScreen> measured_partners(const DiscrepancyContext& context,
     }
     const EffectSetFit& best = *singles.front();
     const double cost = context.residuals(best.prediction, SampleSet::fit_training).squaredNorm();
-    const double excess = cost - context.training_noise_floor();
-    if (!leaves_excess_for_a_partner(cost, context.training_noise_floor())) {
+    const double floor = context.training_noise_floor();
+    const double excess = cost - floor;
+    if (!leaves_excess_for_a_partner(cost, floor)) {
         pair_test["partner_screen"] =
             "not run: the best single effect leaves no excess over the training noise floor";
         pair_test["partner_screen_gain"] = 0.0;
