@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <map>
 
 #include "host_sim/discrepancy/analysis.hpp"
 
@@ -26,6 +27,11 @@ bool window_in_scope(int block, RunScope scope) {
 ModelPrediction Evaluator::run_baseline(std::vector<RunWindow> windows,
                                         const std::function<void(double)>& progress) {
     ++runs_;
+    {
+        const std::lock_guard<std::mutex> lock(stored_mutex_);
+        stored_.clear();  // the windows' start states change: nothing stored holds any more
+        stored_bytes_ = 0;
+    }
     windows_ = std::move(windows);
     ModelPrediction p =
         predict(model_, nlohmann::json::array(), data_, progress, &windows_, &states_);
@@ -56,8 +62,75 @@ std::vector<ModelPrediction> Evaluator::run_all(const std::vector<nlohmann::json
     return run_all(requests);
 }
 
+std::string Evaluator::request_key(const nlohmann::json& effects, RunScope scope) const {
+    // Without windows every scope is the full run.
+    const int s = windowed() ? static_cast<int>(scope) : static_cast<int>(RunScope::full);
+    return std::to_string(s) + effects.dump();
+}
+
+bool Evaluator::recall(const std::string& key, ModelPrediction& into) const {
+    const std::lock_guard<std::mutex> lock(stored_mutex_);
+    for (auto it = stored_.begin(); it != stored_.end(); ++it)
+        if (it->key == key) {
+            into = it->prediction;
+            stored_.splice(stored_.begin(), stored_, it);
+            return true;
+        }
+    return false;
+}
+
+void Evaluator::remember(const std::string& key, const ModelPrediction& p) const {
+    std::size_t bytes = key.size() + sizeof(ModelPrediction) + p.failure.size();
+    for (const auto& o : p.outputs)
+        bytes += o.size() * sizeof(Eigen::Vector3d);
+    for (const std::string& r : p.step_region)
+        bytes += sizeof(std::string) + r.size();
+    if (bytes > kRepeatCacheBytes) return;
+    const std::lock_guard<std::mutex> lock(stored_mutex_);
+    stored_.push_front({key, p, bytes});
+    stored_bytes_ += bytes;
+    while (stored_bytes_ > kRepeatCacheBytes) {
+        stored_bytes_ -= stored_.back().bytes;
+        stored_.pop_back();
+    }
+}
+
 std::vector<ModelPrediction> Evaluator::run_all(
     const std::vector<std::pair<nlohmann::json, RunScope>>& requests) const {
+    std::vector<ModelPrediction> out(requests.size());
+    std::vector<std::string> keys(requests.size());
+    std::vector<std::pair<nlohmann::json, RunScope>> fresh;  // to run
+    std::vector<std::size_t> fresh_of;                       // their requests
+    std::map<std::string, std::size_t> first_in_batch;
+    std::vector<std::pair<std::size_t, std::size_t>> repeated_in_batch;  // (request, first)
+    for (std::size_t r = 0; r < requests.size(); ++r) {
+        keys[r] = request_key(requests[r].first, requests[r].second);
+        if (recall(keys[r], out[r])) {
+            ++repeats_;
+            continue;
+        }
+        const auto [at, first] = first_in_batch.emplace(keys[r], r);
+        if (!first) {
+            repeated_in_batch.emplace_back(r, at->second);
+            ++repeats_;
+            continue;
+        }
+        fresh.push_back(requests[r]);
+        fresh_of.push_back(r);
+    }
+    std::vector<ModelPrediction> ran = execute(fresh);
+    for (std::size_t k = 0; k < ran.size(); ++k) {
+        remember(keys[fresh_of[k]], ran[k]);
+        out[fresh_of[k]] = std::move(ran[k]);
+    }
+    for (const auto& [r, first] : repeated_in_batch)
+        out[r] = out[first];
+    return out;
+}
+
+std::vector<ModelPrediction> Evaluator::execute(
+    const std::vector<std::pair<nlohmann::json, RunScope>>& requests) const {
+    if (requests.empty()) return {};
     // Tasks: a full run is one task; a windowed run is split by windows into as many parts as
     // leave no thread idle (one part each when there are at least as many runs as threads).
     struct Task {

@@ -343,6 +343,7 @@ Json build_report(const DiscrepancyContext& context, const Findings& findings,
     r["recording_span_s"] = {data.start_s, data.end_s};
     r["fit_windows"] = fit_windows_json(context, findings);
     r["model_runs"] = context.evaluator.runs();
+    r["repeated_requests"] = context.evaluator.repeats();  // answered with a stored run
     r["simulated_s"] = context.evaluator.simulated_s();
     r["stages"] = stages.stages();
     r["wall_time_s"] = stages.wall_time_s();
