@@ -106,6 +106,12 @@ std::string report_markdown(const Json& r) {
     md += "- model runs: " + std::to_string(r["model_runs"].get<std::size_t>()) + " (" +
           num(r["simulated_s"], "%.0f") + " recording seconds simulated), " +
           num(r["wall_time_s"], "%.1f") + " s\n";
+    if (r.contains("predictability") && r["predictability"]["judged_again"].get<bool>())
+        md += "- **judged up to " + num(r["predictability"]["until_s"], "%.2f") +
+              " s of the recording only** (`predictability` in report.json): the model run with "
+              "the drive moved by half an encoder count either way parts there, so the record "
+              "cannot decide what follows; the first pass over all of it was " +
+              r["predictability"]["first_pass"]["verdict"].get<std::string>() + "\n";
     if (r["fit_windows"]["windowed"].get<bool>())
         md += "- fitted on windows (`fit_windows` in report.json): " +
               r["fit_windows"]["rule"].get<std::string>() + "\n";
@@ -217,13 +223,14 @@ int run_discrepancy_command(const DiscrepancyOptions& o) {
             PartFile series(dir / "series.csv");
             std::ostream& csv = series.stream();
             csv << "output,component,time_s,held_out,measured,before,after\n";
-            for (std::size_t k = 0; k < data.outputs.size(); ++k) {
-                const discrepancy::MeasuredSeries& m = data.outputs[k];
+            const discrepancy::MeasuredRecording& judged = result.data;  // may be a part
+            for (std::size_t k = 0; k < judged.outputs.size(); ++k) {
+                const discrepancy::MeasuredSeries& m = judged.outputs[k];
                 for (std::size_t i = 0; i < m.time_s.size(); ++i)
                     for (int c = 0; c < m.components; ++c)
                         csv << discrepancy::output_name(m.id) << ',' << "xyz"[c] << ','
                             << m.time_s[i] << ','
-                            << (discrepancy::in_set(data, m.time_s[i],
+                            << (discrepancy::in_set(judged, m.time_s[i],
                                                     discrepancy::SampleSet::held_out)
                                     ? 1
                                     : 0)
@@ -318,7 +325,9 @@ void add_discrepancy_command(CLI::App& app) {
         "judges them on held-out "
         "blocks (a recording longer than the fit budget on one window per block, the named effects "
         "then over all of "
-        "it). Writes DIR/report.json (verdict named/none/unexplained, or with --compare-only "
+        "it). An unexplained recording whose model runs part when the drive moves by half an "
+        "encoder count (a stick-or-slip branch) is judged again up to there. "
+        "Writes DIR/report.json (verdict named/none/unexplained, or with --compare-only "
         "none/disagrees; effects with fitted "
         "parameters, units and SDs, "
         "RMS errors before and after), DIR/report.md with plots, DIR/model.json (the model with "

@@ -33,6 +33,9 @@ struct WorkflowOptions {
     /// Only drive the model and compare: verdict none (every output within its noise) or
     /// disagrees; no effect is searched (`--compare-only`).
     bool compare_only = false;
+    /// An unexplained recording on full runs whose encoder stops deciding the prediction is
+    /// judged again up to there (workflow.hpp); off in that second pass.
+    bool judge_predictable_part = true;
     /// Stage text and overall fraction done, now and then.
     std::function<void(const std::string&, double)> progress;
 };

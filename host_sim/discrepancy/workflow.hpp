@@ -11,7 +11,11 @@
 //               step are fitted (side by side), and the best is named instead when it explains
 //               min_share, beats the single's BIC and explains 5 % more;
 //   unexplained otherwise (no single effect or pair explains min_share): the candidates are
-//               reported, none is named.
+//               reported, none is named. Fitted on full runs, an unexplained recording is then
+//               tested for how far its encoder decides the best candidate's prediction
+//               (predictability.hpp); where a stick-or-slip branch that the encoder cannot
+//               resolve ends that with at least kMinDuration_s before it, the workflow runs again
+//               on that part alone and returns its result (report.json "predictability").
 // "Excess error" is the held-out normalised cost minus what the noise alone gives (1 per output).
 // A recording longer than the fit budget is fitted on windows (fit_windows.hpp): the candidates'
 // costs are then on the windows, and the named effects are run over the whole recording, where
@@ -29,6 +33,7 @@
 namespace scopekin::discrepancy {
 
 struct WorkflowResult {
+    MeasuredRecording data;         ///< the recording judged (its predictable part, or all of it)
     nlohmann::ordered_json report;  ///< report.json
     nlohmann::json model;           ///< model.json: the input model with the named effects added
     ModelPrediction before;         ///< the model as given

@@ -124,12 +124,16 @@ def judge(report, effects):
     each criterion, `success` and, when it failed, `why` (the first criterion missed)."""
     named = sorted(e["name"] for e in report.get("effects", []))
     verdict = report.get("verdict")
+    # Judged on the part of the recording its encoder decides (report.json "predictability").
+    test = report.get("predictability") or {}
+    part = {"judged_until_s": test.get("until_s") if test.get("judged_again") else None}
     if not effects:
         ok = verdict == "none"
-        return {"verdict": verdict, "named": named, "success": ok,
+        return {**part, "verdict": verdict, "named": named, "success": ok,
                 "why": None if ok else f"verdict {verdict} ({', '.join(named) or 'no effect'}) on a null recording"}
     hidden = sorted(e["name"] for e in effects)
-    result = {"verdict": verdict, "named": named, "verdict_ok": verdict == "named", "names_ok": named == hidden}
+    result = {**part, "verdict": verdict, "named": named, "verdict_ok": verdict == "named",
+              "names_ok": named == hidden}
     # The sets the report gives as explaining the recording as well as the named one: where the
     # hidden set is among them the recording cannot tell it from what was named (still a failure).
     equals = [sorted(s["effects"]) for s in (report.get("equally_consistent") or {}).get("sets", [])]

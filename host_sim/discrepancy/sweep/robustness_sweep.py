@@ -381,6 +381,9 @@ def cmd_summarise(args):
         "failures": [{"case": r["name"], "why": r.get("why"),
                       "hidden_listed_as_equal": bool(r.get("hidden_listed_as_equal"))}
                      for r in results if not r["success"]],
+        # Cases the workflow judged on the part of the recording its encoder decides (a branch).
+        "judged_on_predictable_part": [{"case": r["name"], "until_s": r["judged_until_s"], "success": r["success"]}
+                                       for r in results if r.get("judged_until_s") is not None],
         "sd_coverage": sd_coverage(results),
         "screening_profiles": profile_shapes(args.out, results),
         # Which binaries judged the cases (a count is one code's only with one digest).
@@ -392,7 +395,7 @@ def cmd_summarise(args):
     with open(os.path.join(args.out, "sweep.json"), "w") as f:
         json.dump(summary, f, indent=1)
     keys = ["name", "effect", "size", "procedure", "noise_factor", "seed", "success", "verdict", "named",
-            "most_affected_output", "reduction", "why", "true_model_meets_bar"]
+            "most_affected_output", "reduction", "why", "true_model_meets_bar", "judged_until_s"]
     with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
         w = csv.writer(f, lineterminator="\n")
         w.writerow(keys + ["max_relative_parameter_error", "discrepancy_wall_s"])
@@ -465,6 +468,12 @@ def write_markdown(out, summary, results):
                   f"({t['judged_where_true_model_meets_bar']} cases).", ""]
         lines += [f"- `{m['case']}`: the true model's {m['output']} held-out error down {100 * m['reduction']:.0f} % "
                   f"(verdict {m['true_model_verdict']})" for m in t["missed_by_true_model"]]
+        lines += [""]
+    if summary["judged_on_predictable_part"]:
+        lines += ["Judged on the recording's predictable part (the workflow's runs with the drive moved by half an "
+                  "encoder count part there: report.json `predictability`):", ""]
+        lines += [f"- `{j['case']}`: up to {j['until_s']:.2f} s, {'right' if j['success'] else 'wrong'}"
+                  for j in summary["judged_on_predictable_part"]]
         lines += [""]
     if summary["failures"]:
         listed = sum(1 for f in summary["failures"] if f["hidden_listed_as_equal"])

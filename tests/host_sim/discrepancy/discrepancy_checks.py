@@ -105,6 +105,10 @@ def check_hidden(name):
         return
     if name == "unexplained":
         expect(r["verdict"] == "unexplained", f"an effect outside the library: verdict unexplained (got {r['verdict']}, {named})")
+        # A late tracker is no stick-or-slip branch: the encoder decides the prediction to the end.
+        test = r.get("predictability") or {}
+        expect(test.get("runs_ok") is True and test.get("until_s") is None and test.get("judged_again") is False,
+               f"the best candidate run with the drive moved by half an encoder count never parts: {test}")
         return
     expect(r["verdict"] == "named", f"verdict named (got {r['verdict']})")
     expect(sorted(named) == sorted(e["name"] for e in effects), f"named {named}, hidden {[e['name'] for e in effects]}")
@@ -321,6 +325,12 @@ def check_sweep(_name):
     expect(not listed["success"] and listed["hidden_listed_as_equal"],
            f"the rule: the hidden set listed as equal is a failure, marked ({listed})")
     expect(not procedures.judge(report(0.8), hidden)["hidden_listed_as_equal"], "the rule: right names are not marked")
+    # Judged on the recording's predictable part: the case says up to where (sweep.md lists it).
+    part = report(0.8)
+    part["predictability"] = {"judged_again": True, "until_s": 25.1}
+    expect(procedures.judge(part, hidden)["judged_until_s"] == 25.1 and
+           procedures.judge(report(0.8), hidden)["judged_until_s"] is None,
+           "the rule: a case judged on its predictable part says up to where; the others do not")
 
 
 if CHECK == "bad_input":
