@@ -47,6 +47,8 @@ std::optional<WorkflowResult> judge_predictable_part(const DiscrepancyContext& c
                           : "less than " + std::to_string(static_cast<int>(kMinDuration_s)) +
                                 " s would be left to judge";
         first_report["predictability"] = note;
+        first_report["model_runs"] = first_report["model_runs"].get<std::size_t>() + 2;
+        first_report["wall_time_s"] = stages.wall_time_s();
         return std::nullopt;
     }
     WorkflowOptions again = context.options;
