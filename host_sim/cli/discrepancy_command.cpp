@@ -112,6 +112,11 @@ std::string report_markdown(const Json& r) {
               "the drive moved by half an encoder count either way parts there, so the record "
               "cannot decide what follows; the first pass over all of it was " +
               r["predictability"]["first_pass"]["verdict"].get<std::string>() + "\n";
+    else if (r.contains("predictability") && r["predictability"]["until_s"].is_number())
+        md += "- the model run with the drive moved by half an encoder count either way parts at " +
+              num(r["predictability"]["until_s"], "%.2f") +
+              " s: the record cannot decide what follows, and the part before is too short to "
+              "judge again (`predictability` in report.json)\n";
     if (r["fit_windows"]["windowed"].get<bool>())
         md += "- fitted on windows (`fit_windows` in report.json): " +
               r["fit_windows"]["rule"].get<std::string>() + "\n";
