@@ -30,30 +30,27 @@ MeasuredRecording truncated_at(const MeasuredRecording& data, double end_s) {
         throw DiscrepancyInputError(message.str());
     }
     MeasuredRecording cut = data;
-    cut.drive.clear();
-    for (const DriveSample& s : data.drive)
-        if (s.time_s <= end_s) cut.drive.push_back(s);
+    cut.drive.resize(static_cast<std::size_t>(
+        std::upper_bound(data.drive.begin(), data.drive.end(), end_s,
+                         [](double t, const DriveSample& s) { return t < s.time_s; }) -
+        data.drive.begin()));
     cut.end_s = cut.drive.back().time_s;
     cut.duration_s = cut.end_s - cut.start_s;
+    // Every series is in time order: keep each one's samples up to the drive's last sample.
+    const auto kept = [last = cut.end_s](const std::vector<double>& t) {
+        return static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), last) - t.begin());
+    };
     cut.outputs.clear();
     for (const MeasuredSeries& m : data.outputs) {
-        MeasuredSeries kept = m;
-        kept.time_s.clear();
-        kept.value.clear();
-        for (std::size_t i = 0; i < m.time_s.size(); ++i)
-            if (m.time_s[i] <= cut.end_s) {
-                kept.time_s.push_back(m.time_s[i]);
-                kept.value.push_back(m.value[i]);
-            }
-        if (kept.time_s.size() >= 20) cut.outputs.push_back(std::move(kept));
+        const std::size_t n = kept(m.time_s);
+        if (n < 20) continue;  // as extraction: an output needs 20 samples
+        MeasuredSeries& part = cut.outputs.emplace_back(m);
+        part.time_s.resize(n);
+        part.value.resize(n);
     }
-    cut.region_time_s.clear();
-    cut.region.clear();
-    for (std::size_t i = 0; i < data.region_time_s.size(); ++i)
-        if (data.region_time_s[i] <= cut.end_s) {
-            cut.region_time_s.push_back(data.region_time_s[i]);
-            cut.region.push_back(data.region[i]);
-        }
+    const std::size_t labels = kept(data.region_time_s);
+    cut.region_time_s.resize(labels);
+    cut.region.resize(labels);
     cut.fit_spans_s.clear();  // the windows are placed again on what is left
     return cut;
 }
