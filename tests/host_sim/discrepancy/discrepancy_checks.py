@@ -35,7 +35,11 @@ failures = []
 CHECKS = {
     "viscoadhesive_friction": ("B", 11, [{"name": "viscoadhesive_friction", "viscous_coefficient_s_per_mm": 0.003}], None),
     "mesenteric_retraction": ("A", 12, [{"name": "mesenteric_retraction", "stiffness_N_per_mm2": 0.0025}], None),
-    "ei_profile": ("C", 13, [{"name": "ei_profile", "tip_factor": 0.7, "handle_factor": 1.2}], None),
+    # On B (320 mm, the sigmoid only): a model run there costs 0.4 of one on C (1.3 s against
+    # 3.2 s), and this check was the CI's longest (1,141 s on C). The handle factor is the harder
+    # of the two to see (only the inserted shaft bends): on B it comes out 6 % low (1.128 for 1.2).
+    # C's junction stays in the checks (tissue_stiffening, none) and in the sweep's ei_profile cells.
+    "ei_profile": ("B", 13, [{"name": "ei_profile", "tip_factor": 0.7, "handle_factor": 1.2}], None),
     "ei_scale": ("B", 14, [{"name": "ei_scale", "factor": 1.12}], None),
     "sigmoid_mobility": ("A", 15, [{"name": "sigmoid_mobility", "amplitude_N_per_mm": 0.004, "frequency_Hz": 0.35,
                                     "direction": [0, 0.6, 0.8], "phase_rad": 0.7}], None),
