@@ -16,6 +16,7 @@
 // force moves with the insertion, a few N/mm: 0.01 mm is a few noise SDs) stays under the ratio;
 // an event one run has a step earlier is a spike of a few samples; a branch (newtons, for
 // seconds) is neither.
+#include <cstddef>
 #include <optional>
 #include <vector>
 
@@ -61,6 +62,9 @@ struct Predictability {
     std::optional<double> until_s;  ///< where the record stops deciding the prediction
     nlohmann::ordered_json report;  ///< report.json "predictability"
 };
+
+/// The full runs assess_predictability makes: the drive moved by + and - half an encoder count.
+inline constexpr std::size_t kPredictabilityRuns = 2;
 
 /// Runs `effects` under the recording's drive moved by + and - half an encoder count (two full
 /// runs in parallel) and compares them (predictable_until) on the outputs that `prediction` (the

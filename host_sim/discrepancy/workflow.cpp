@@ -39,7 +39,7 @@ std::optional<WorkflowResult> judge_predictable_part(const DiscrepancyContext& c
                           {"most_affected_output", first_report["most_affected_output"]},
                           {"model_runs", first_report["model_runs"]},
                           {"wall_time_s", first_report["wall_time_s"]}};
-    note["predictability_runs"] = 2;
+    note["predictability_runs"] = kPredictabilityRuns;
     if (!test.until_s || *test.until_s - data.start_s < kMinDuration_s) {
         note["judged_again"] = false;
         note["why"] = !test.until_s
@@ -47,7 +47,8 @@ std::optional<WorkflowResult> judge_predictable_part(const DiscrepancyContext& c
                           : "less than " + std::to_string(static_cast<int>(kMinDuration_s)) +
                                 " s would be left to judge";
         first_report["predictability"] = note;
-        first_report["model_runs"] = first_report["model_runs"].get<std::size_t>() + 2;
+        first_report["model_runs"] =
+            first_report["model_runs"].get<std::size_t>() + kPredictabilityRuns;
         first_report["wall_time_s"] = stages.wall_time_s();
         return std::nullopt;
     }
@@ -65,8 +66,8 @@ std::optional<WorkflowResult> judge_predictable_part(const DiscrepancyContext& c
         "there";
     nlohmann::ordered_json& r = part.report;
     r["predictability"] = note;
-    r["model_runs"] =
-        r["model_runs"].get<std::size_t>() + first_report["model_runs"].get<std::size_t>() + 2;
+    r["model_runs"] = r["model_runs"].get<std::size_t>() +
+                      first_report["model_runs"].get<std::size_t>() + kPredictabilityRuns;
     r["repeated_requests"] = r["repeated_requests"].get<std::size_t>() +
                              first_report["repeated_requests"].get<std::size_t>();
     r["wall_time_s"] = stages.wall_time_s();
