@@ -1,5 +1,6 @@
 """What the studies of host_sim/evaluate share: an evaluation's case folders, a complete case's
-summary, its CSVs read as named columns, and the bad input they refuse (exit status 2)."""
+summary, its CSVs read as named columns, a table written as CSV, and the bad input they refuse
+(exit status 2)."""
 import csv
 import json
 import os
@@ -46,3 +47,11 @@ def complete_summary(folder):
     except ValueError as e:
         raise BadInput(f"{path}: not JSON ({e})")
     return summary if summary.get("status") == "complete" else None
+
+
+def write_rows(path, fieldnames, rows):
+    """rows (dicts) as a CSV with the named columns, in that order (other keys left out)."""
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fieldnames, extrasaction="ignore", lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)

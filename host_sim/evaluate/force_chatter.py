@@ -19,14 +19,13 @@ python3-matplotlib, skipped with a note without it). Prints one line per case. E
 bad input (no complete case, a missing column), 3 if an output cannot be written.
 """
 import argparse
-import csv
 import json
 import os
 import sys
 
 import numpy as np
 
-from case_columns import BadInput, case_folders, columns, complete_summary
+from case_columns import BadInput, case_folders, columns, complete_summary, write_rows
 
 
 def case_style(name):
@@ -65,11 +64,7 @@ def distribution(shares):
 
 def write_outputs(out, rows, report):
     os.makedirs(out, exist_ok=True)
-    with open(os.path.join(out, "force_chatter.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["case", "style", "steps", "chattering", "share"],
-                           lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
+    write_rows(os.path.join(out, "force_chatter.csv"), ["case", "style", "steps", "chattering", "share"], rows)
     with open(os.path.join(out, "force_chatter.json"), "w") as f:
         json.dump(report, f, indent=1)
     try:
