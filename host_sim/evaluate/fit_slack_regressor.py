@@ -26,7 +26,6 @@ floor + a * |slack| + b * depth [m]) is fitted to the held-out errors and scaled
 held-out periods lie within it. Needs Debian's python3-sklearn and python3-numpy.
 """
 import argparse
-import csv
 import glob
 import json
 import os
