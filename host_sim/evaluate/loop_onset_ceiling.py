@@ -166,7 +166,7 @@ def draw(out, rows, episode_rows, sets, budget):
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
     for s in sets:
         for family, marker in (("excess", "o"), ("stall", "s")):
-            pts = [r for r in rows if r["set"] == s and r["family"] == family]
+            pts = [r for r in rows if r["set"] == s and r["family"] == family and r["episodes"]]
             axes[0].scatter([r["false_alarms_per_10min"] for r in pts],
                             [100.0 * r["detected_share"] for r in pts], marker=marker, label=f"{s}: {family}")
     axes[0].axvline(budget, color="grey", ls="--", lw=1)
@@ -224,6 +224,38 @@ def set_names(folders):
     return names
 
 
+def report_of(rows, episode_rows, sets, budget):
+    """Each family's setting chosen on the first set, its scores on every set, the take-up."""
+    tuned_on = sets[0][0]
+    report = {"budget_false_alarms_per_10min": budget, "sets": dict(sets), "families": {}}
+    for family in ("excess", "stall"):
+        best = choose([r for r in rows if r["set"] == tuned_on], family, budget)
+        entry = {"chosen_on": tuned_on, "setting": None if best is None else best["setting"], "scores": {}}
+        if best is not None:
+            entry["scores"] = {r["set"]: r for r in rows if r["family"] == family and r["setting"] == best["setting"]}
+        report["families"][family] = entry
+    report["take_up_0_5s_after_onset"] = {s: take_up_summary(episode_rows, s) for s, _ in sets}
+    return report
+
+
+def print_summary(report, tuned_on_dir, budget):
+    for family, entry in report["families"].items():
+        if entry["setting"] is None:
+            print(f"{family}: no setting within {budget:g} false alarms per 10 min on {tuned_on_dir}")
+            continue
+        for set_name, s in entry["scores"].items():
+            share = "n/a" if s["detected_share"] is None else f"{100.0 * s['detected_share']:.0f} %"
+            print(f"{family} {entry['setting']} on {set_name}: {s['detected']} of {s['episodes']} onsets within "
+                  f"0.5 s ({share}; {s['late']} late, {s['missed']} missed), "
+                  f"{s['false_alarms_per_10min']:.2f} false alarms per 10 min")
+    for set_name, s in report["take_up_0_5s_after_onset"].items():
+        if s is None:
+            print(f"{set_name}: no loop episode")
+            continue
+        print(f"{set_name}: scope taken up 0.5 s after the onset, median {s['median_mm']:.1f} mm "
+              f"(10th percentile {s['p10_mm']:.1f}, 90th {s['p90_mm']:.1f})")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("eval_dir", help="the evaluation the settings are chosen on (development)")
@@ -235,7 +267,6 @@ def main():
         print(f"loop_onset_ceiling: --budget must be > 0 (got {args.budget})", file=sys.stderr)
         return 2
     sets = set_names([args.eval_dir] + args.test)
-    tuned_on = sets[0][0]
     rows, episode_rows, data = [], [], {}
     try:
         for set_name, d in sets:
@@ -250,32 +281,13 @@ def main():
         for family, label, p in settings():
             rows.append({"set": set_name, "family": family, "setting": label, "parameters": p,
                          **score_setting(cases, family, p)})
-    report = {"budget_false_alarms_per_10min": args.budget, "sets": dict(sets), "families": {}}
-    for family in ("excess", "stall"):
-        best = choose([r for r in rows if r["set"] == tuned_on], family, args.budget)
-        entry = {"chosen_on": tuned_on, "setting": None if best is None else best["setting"], "scores": {}}
-        for set_name, _ in sets:
-            if best is not None:
-                entry["scores"][set_name] = next(r for r in rows if r["set"] == set_name and
-                                                 r["family"] == family and r["setting"] == best["setting"])
-        report["families"][family] = entry
-    report["take_up_0_5s_after_onset"] = {s: take_up_summary(episode_rows, s) for s, _ in sets}
+    report = report_of(rows, episode_rows, sets, args.budget)
     try:
         write_outputs(args.out, rows, episode_rows, report, [s for s, _ in sets], args.budget)
     except OSError as e:
         print(f"loop_onset_ceiling: cannot write {args.out}: {e}", file=sys.stderr)
         return 3
-    for family, entry in report["families"].items():
-        if entry["setting"] is None:
-            print(f"{family}: no setting within {args.budget:g} false alarms per 10 min on {args.eval_dir}")
-            continue
-        for set_name, s in entry["scores"].items():
-            print(f"{family} {entry['setting']} on {set_name}: {s['detected']} of {s['episodes']} onsets within "
-                  f"0.5 s ({100.0 * s['detected_share']:.0f} %; {s['late']} late, {s['missed']} missed), "
-                  f"{s['false_alarms_per_10min']:.2f} false alarms per 10 min")
-    for set_name, s in report["take_up_0_5s_after_onset"].items():
-        print(f"{set_name}: scope taken up 0.5 s after the onset, median {s['median_mm']:.1f} mm "
-              f"(10th percentile {s['p10_mm']:.1f}, 90th {s['p90_mm']:.1f})")
+    print_summary(report, args.eval_dir, args.budget)
     return 0
 
 
