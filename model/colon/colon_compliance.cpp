@@ -47,12 +47,25 @@ ColonCompliance::ColonCompliance(const ColonStructure& colon) : nodes_(colon.bea
         }
     }
     if (!compliance_.allFinite()) throw ModelError("colon: the colon's compliance is not finite");
+    blocks_.resize(nodes_ * nodes_);
+    for (std::size_t i = 0; i < nodes_; ++i)
+        for (std::size_t j = 0; j < nodes_; ++j)
+            blocks_[i * nodes_ + j] = compliance_.block<3, 3>(static_cast<Eigen::Index>(3 * i),
+                                                              static_cast<Eigen::Index>(3 * j));
 }
 
 Eigen::Matrix3d ColonCompliance::point_block(std::size_t sa, double wa, std::size_t sb,
                                              double wb) const {
     return (1.0 - wa) * ((1.0 - wb) * node_block(sa, sb) + wb * node_block(sa, sb + 1)) +
            wa * ((1.0 - wb) * node_block(sa + 1, sb) + wb * node_block(sa + 1, sb + 1));
+}
+
+Eigen::Vector3d ColonCompliance::point_displacement(
+    std::size_t segment, double weight, const std::vector<ColonPointForce>& forces) const {
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (const ColonPointForce& f : forces)
+        u += point_block(segment, weight, f.segment, f.weight) * f.force_N;
+    return u;
 }
 
 void ColonCompliance::displacement(const std::vector<ColonPointForce>& forces,

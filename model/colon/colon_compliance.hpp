@@ -28,13 +28,16 @@ public:
     explicit ColonCompliance(const ColonStructure& colon);
     std::size_t node_count() const { return nodes_; }
     /// Translational compliance between nodes i and j [mm/N].
-    Eigen::Matrix3d node_block(std::size_t i, std::size_t j) const {
-        return compliance_.block<3, 3>(static_cast<Eigen::Index>(3 * i),
-                                       static_cast<Eigen::Index>(3 * j));
+    const Eigen::Matrix3d& node_block(std::size_t i, std::size_t j) const {
+        return blocks_[i * nodes_ + j];
     }
     /// Compliance between two centerline points (segment, weight) [mm/N].
     Eigen::Matrix3d point_block(std::size_t segment_a, double weight_a, std::size_t segment_b,
                                 double weight_b) const;
+    /// Displacement of a centerline point (segment, weight) [mm] under the given point forces:
+    /// the sum of point_block x force over the forces, in their order.
+    Eigen::Vector3d point_displacement(std::size_t segment, double weight,
+                                       const std::vector<ColonPointForce>& forces) const;
     /// Displacement of every node [mm] under the given point forces.
     void displacement(const std::vector<ColonPointForce>& forces,
                       std::vector<Eigen::Vector3d>& displacement_mm) const;
@@ -46,7 +49,11 @@ public:
 
 private:
     std::size_t nodes_ = 0;
-    Eigen::MatrixXd compliance_;
+    Eigen::MatrixXd compliance_;  ///< for displacement(): one matrix-vector product
+    /// The same numbers as 3x3 blocks, node pair (i, j) at i * nodes_ + j: a point's block and
+    /// its neighbour's are adjacent in memory (the contact assembly reads them pairwise; read
+    /// from the 2.6 MB column-major matrix each block touched three cache lines).
+    std::vector<Eigen::Matrix3d> blocks_;
 };
 
 }  // namespace scopekin::model
